@@ -1,0 +1,18 @@
+"""The studies: one module per study with ``NAME``, ``SCENE``, ``SOLVERS``, ``run(...) -> Dataset``,
+``gates(ds)``, ``errors(ds)`` (rows for accuracy against cost) and ``plot(ds, outdir)``."""
+from __future__ import annotations
+
+import importlib
+
+STUDIES = {
+    "ss_curve": "studies.ss_curve",
+}
+# The studies that `workbench verify` runs, in order.
+HEADLINE = ("ss_curve",)
+
+
+def get(name: str):
+    """The study module called ``name`` (ValueError naming the allowed ones otherwise)."""
+    if name not in STUDIES:
+        raise ValueError(f"study: {name!r} is unknown; allowed: {', '.join(STUDIES)}")
+    return importlib.import_module(STUDIES[name])

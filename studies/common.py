@@ -1,0 +1,97 @@
+"""What every study shares: the solver registry, one guarded call per (scene, solver, resolution)
+run, gate records, and the observed order of convergence.
+
+A solver is a function ``solve(scene, resolution, **options) -> dict`` (see the study modules for
+the keys each scene returns). A run that raises is a result, not a crash: :func:`run_solver` turns
+the exception into ``status = 'error: …'`` and the sweep goes on.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+log = logging.getLogger("workbench")
+
+# solver name -> "module:function"; 'analytic' is handled by each study itself.
+SOLVER_ENTRY = {
+    "fem": "fem_reference:solve",
+    "csph": "sph.csph:solve",
+    "hpm": "sph.hpm:solve",
+    "sph": "sph.classic:solve",
+}
+ALL_SOLVERS = ("analytic", "fem", "csph", "hpm", "sph")
+
+
+def solver_function(name: str):
+    if name not in SOLVER_ENTRY:
+        raise ValueError(f"solver: {name!r} is unknown; allowed: {', '.join(ALL_SOLVERS)}")
+    mod, fn = SOLVER_ENTRY[name].split(":")
+    return getattr(importlib.import_module(mod), fn)
+
+
+def run_solver(name: str, scene, resolution: int, **options) -> dict:
+    """Call one solver once; never raises for a failed run. Adds ``wall_time`` if the solver did not
+    and a ``status`` (``ok``, ``unstable: …``, ``diverged``, ``error: …``)."""
+    t0 = time.perf_counter()
+    try:
+        out = dict(solver_function(name)(scene, resolution, **options))
+    except Exception as err:  # a failed run is a result
+        log.debug("%s", traceback.format_exc())
+        out = {"status": f"error: {type(err).__name__}: {err}"}
+    wall = time.perf_counter() - t0
+    out.setdefault("wall_time", wall)
+    out.setdefault("status", "ok")
+    status = out["status"]
+    if not isinstance(status, str):
+        status = "ok" if all(s == "ok" for s in status) else next(s for s in status if s != "ok")
+    log.info("run %-10s %-6s resolution=%-4s %7.2f s  %s", scene.name, name, resolution, wall, status)
+    return out
+
+
+@dataclass
+class Gate:
+    """One accuracy gate: what was compared, the observed value, the tolerance and why."""
+
+    name: str
+    observed: float
+    tolerance: float
+    reason: str
+    passed: bool
+
+    @classmethod
+    def at_most(cls, name: str, observed: float, tolerance: float, reason: str) -> "Gate":
+        ok = bool(np.isfinite(observed) and observed <= tolerance)
+        return cls(name, float(observed), float(tolerance), reason, ok)
+
+    def line(self) -> str:
+        mark = "PASS" if self.passed else "FAIL"
+        return f"{mark}  {self.name}: {self.observed:.4g} (tolerance {self.tolerance:.4g}) — {self.reason}"
+
+
+def observed_order(h, err) -> float:
+    """Least-squares slope of log(err) against log(h) over the finite, positive points (NaN if fewer
+    than three)."""
+    h = np.asarray(h, float)
+    err = np.abs(np.asarray(err, float))
+    ok = np.isfinite(err) & (err > 0) & np.isfinite(h) & (h > 0)
+    if ok.sum() < 3:
+        return float("nan")
+    slope, _ = np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)
+    return float(slope)
+
+
+def check_resolutions(resolutions) -> list[int]:
+    out = []
+    for r in resolutions:
+        r = int(r)
+        if r < 1:
+            raise ValueError(f"resolution: {r} is out of range; allowed: integers >= 1 "
+                             "(particles or elements across the body; a spacing larger than the "
+                             "body is not a discretisation)")
+        out.append(r)
+    return out

@@ -1,0 +1,228 @@
+"""The one material-point library that every method (FEM quadrature points, CSPH, HPM, classic SPH)
+calls.
+
+A material is a frozen :class:`Material` whose :meth:`Material.params` packs it into a flat float64
+vector ``prm`` that the numba point routines in :mod:`workbench.materials.kernels` read:
+
+====  ==========================================================================
+slot  meaning
+====  ==========================================================================
+0     law code: 0 Saint Venant–Kirchhoff, 1 compressible neo-Hookean,
+      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky + Swift)
+1     Lamé λ, Pa (for law 2: the λ of eq. 12)
+2     shear modulus μ, Pa (law 2: unused, its small-strain value is c1 + c2)
+3     Swift C, Pa            (law 3)
+4     Swift ε0, -            (law 3)
+5     Swift n, -             (law 3)
+6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, stress zero once D ≥ 1
+7     c1, Pa                 (law 2)
+8     c2, Pa                 (law 2)
+9     tolerance of the local Newton on the plastic multiplier (relative)
+====  ==========================================================================
+
+History per point (``n_history`` columns): none for the elastic laws; for J2 eleven floats,
+``[Cp⁻¹ (3×3, row-major), ε_p, D]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial left
+Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed.
+
+Deformation gradients are always 3×3; plane strain is F33 = 1 with the 2×2 block taken from P.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
+N_PARAMS = 10
+N_HISTORY_J2 = 11
+HIST_EPS_P = 9
+HIST_DAMAGE = 10
+
+
+@dataclass(frozen=True)
+class Material:
+    """A constitutive law and its constants (SI units).
+
+    Build with the class methods (:meth:`svk`, :meth:`neo_hooke`, :meth:`mooney_rivlin`,
+    :meth:`j2`); they validate the constants and raise ``ValueError`` naming the parameter and its
+    allowed range.
+    """
+
+    law: str
+    E: float = 0.0
+    nu: float = 0.0
+    rho: float = 1000.0
+    C: float = 0.0
+    eps0: float = 0.0
+    n: float = 0.0
+    eps_L: float = math.inf
+    c1: float = 0.0
+    c2: float = 0.0
+    lam_mr: float = 0.0
+    tol: float = 1e-12
+
+    # -- constructors -------------------------------------------------------------------------
+    @classmethod
+    def svk(cls, E: float, nu: float, rho: float = 1000.0) -> "Material":
+        return cls(law="svk", E=E, nu=nu, rho=rho).validated()
+
+    @classmethod
+    def neo_hooke(cls, E: float, nu: float, rho: float = 1000.0) -> "Material":
+        return cls(law="neo_hooke", E=E, nu=nu, rho=rho).validated()
+
+    @classmethod
+    def mooney_rivlin(cls, c1: float, c2: float, lam: float, rho: float = 1000.0) -> "Material":
+        """004 eq. 12: ψ = ½c1 I1 + ½c2 I2 − [3/2 c1 I3^{1/3} + 3/2 c2 I3^{2/3} − λ/4 (ln I3)²]."""
+        mu = c1 + c2
+        E = mu * (3 * lam + 2 * mu) / (lam + mu)
+        nu = lam / (2 * (lam + mu))
+        return cls(law="mooney_rivlin", E=E, nu=nu, rho=rho, c1=c1, c2=c2, lam_mr=lam).validated()
+
+    @classmethod
+    def j2(cls, E: float, nu: float, C: float, eps0: float, n: float, rho: float = 7974.0,
+           eps_L: float = math.inf) -> "Material":
+        """Finite-strain J2: multiplicative split, Hencky elasticity, exponential-map return
+        mapping, Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff stress."""
+        return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L).validated()
+
+    @classmethod
+    def from_bulk_shear(cls, law: str, K: float, G: float, rho: float) -> "Material":
+        E = 9 * K * G / (3 * K + G)
+        nu = (3 * K - 2 * G) / (2 * (3 * K + G))
+        return cls(law=law, E=E, nu=nu, rho=rho).validated()
+
+    # -- checks -------------------------------------------------------------------------------
+    def validated(self) -> "Material":
+        if self.law not in LAW_CODES:
+            raise ValueError(f"law: {self.law!r} is not one of {sorted(LAW_CODES)}")
+        if not self.E > 0:
+            raise ValueError(f"E: {self.E} Pa is not allowed; E must be > 0")
+        if not (-1.0 < self.nu < 0.5):
+            raise ValueError(f"nu: {self.nu} is not allowed; Poisson's ratio must lie in (-1, 0.5)")
+        if not self.rho > 0:
+            raise ValueError(f"rho: {self.rho} kg/m^3 is not allowed; density must be > 0")
+        if self.law == "j2":
+            if not self.C > 0:
+                raise ValueError(f"C: {self.C} Pa is not allowed; Swift C must be > 0")
+            if not self.eps0 > 0:
+                raise ValueError(f"eps0: {self.eps0} is not allowed; Swift eps0 must be > 0")
+            if not (0 <= self.n < 1):
+                raise ValueError(f"n: {self.n} is not allowed; Swift exponent must lie in [0, 1)")
+            if not self.eps_L > 0:
+                raise ValueError(f"eps_L: {self.eps_L} is not allowed; strain limit must be > 0")
+        if self.law == "mooney_rivlin" and not (self.c1 >= 0 and self.c2 >= 0 and self.c1 + self.c2 > 0):
+            raise ValueError("c1, c2: must be >= 0 with c1 + c2 > 0")
+        return self
+
+    def replace(self, **changes) -> "Material":
+        return dataclasses.replace(self, **changes).validated()
+
+    # -- derived quantities -------------------------------------------------------------------
+    @property
+    def mu(self) -> float:
+        """Small-strain shear modulus, Pa."""
+        return self.E / (2 * (1 + self.nu))
+
+    @property
+    def lam(self) -> float:
+        """Small-strain Lamé λ, Pa."""
+        return self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
+
+    @property
+    def K(self) -> float:
+        """Small-strain bulk modulus, Pa."""
+        return self.E / (3 * (1 - 2 * self.nu))
+
+    @property
+    def sigma_y0(self) -> float:
+        """Initial yield stress C ε0^n, Pa (J2 only)."""
+        return self.C * self.eps0 ** self.n
+
+    def wave_speed(self, plane: str | None = "strain") -> float:
+        """Fastest small-strain elastic wave speed, m/s (P wave; in plane stress the plate wave)."""
+        if plane == "stress":
+            return math.sqrt(self.E / (self.rho * (1 - self.nu ** 2)))
+        return math.sqrt((self.lam + 2 * self.mu) / self.rho)
+
+    @property
+    def n_history(self) -> int:
+        return N_HISTORY_J2 if self.law == "j2" else 0
+
+    def params(self) -> np.ndarray:
+        """The flat float64 vector the numba kernels read (layout in the module docstring)."""
+        p = np.zeros(N_PARAMS)
+        p[0] = LAW_CODES[self.law]
+        p[1] = self.lam_mr if self.law == "mooney_rivlin" else self.lam
+        p[2] = self.mu
+        p[3], p[4], p[5] = self.C, self.eps0, self.n
+        p[6] = self.eps_L
+        p[7], p[8] = self.c1, self.c2
+        p[9] = self.tol
+        return p
+
+    def initial_history(self, n_points: int) -> np.ndarray:
+        """History of ``n_points`` virgin points, shape ``(n_points, n_history)``."""
+        h = np.zeros((n_points, self.n_history))
+        if self.law == "j2":
+            h[:, 0] = h[:, 4] = h[:, 8] = 1.0  # Cp⁻¹ = I
+        return h
+
+    def describe(self) -> dict:
+        """Attributes for a dataset (law and its constants)."""
+        d = {"material_law": self.law, "E": self.E, "nu": self.nu, "rho": self.rho}
+        if self.law == "j2":
+            d.update(swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n, eps_L=self.eps_L,
+                     hardening_on="Kirchhoff stress")
+        if self.law == "mooney_rivlin":
+            d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
+        return d
+
+
+# Materials of the papers (scenes.md).
+TABLE1_STEEL = Material.j2(E=202e9, nu=0.3, C=868.8e6, eps0=0.0013, n=0.179, rho=7974.0)
+RUBBER = Material.from_bulk_shear("svk", K=3.25e6, G=7.15e5, rho=1000.0)
+RING_RUBBER = Material.mooney_rivlin(c1=1.265e5, c2=1.012e4, lam=1.012e7, rho=125.4)
+BEAM = Material.svk(E=1.0e5, nu=0.3, rho=1000.0)
+
+
+def evaluate(material: Material, F: np.ndarray, history: np.ndarray | None = None,
+             tangent: bool = False, stress: str = "P"):
+    """Stress at many points.
+
+    F: (N, 3, 3) or (3, 3). history: (N, n_history) or None (virgin). Returns a dict with
+    ``stress`` ((N,3,3): 'P' first Piola–Kirchhoff, 'tau' Kirchhoff, 'sigma' Cauchy), ``history``
+    (N, n_history), ``status`` (N,) int (0 ok; see kernels) and, with ``tangent``, ``A`` = dP/dF of
+    shape (N, 3, 3, 3, 3), A[i, j, k, l] = ∂P_ij/∂F_kl.
+    """
+    from . import kernels
+
+    F = np.asarray(F, dtype=np.float64)
+    single = F.ndim == 2
+    F = np.ascontiguousarray(F.reshape(-1, 3, 3))
+    if history is None:
+        history = material.initial_history(F.shape[0])
+    history = np.ascontiguousarray(np.asarray(history, dtype=np.float64).reshape(F.shape[0], -1))
+    if history.shape[1] != material.n_history:
+        raise ValueError(f"history: expected {material.n_history} columns, got {history.shape[1]}")
+    prm = material.params()
+    if tangent:
+        P, A, h, status = kernels.material_points_tangent(F, history, prm)
+    else:
+        P, h, status = kernels.material_points(F, history, prm)
+        A = None
+    if stress == "P":
+        out = P
+    elif stress in ("tau", "sigma"):
+        out = np.einsum("nij,nkj->nik", P, F)
+        if stress == "sigma":
+            out = out / np.linalg.det(F)[:, None, None]
+    else:
+        raise ValueError(f"stress: {stress!r} is not one of 'P', 'tau', 'sigma'")
+    res = {"stress": out, "history": h, "status": status}
+    if A is not None:
+        res["A"] = A
+    if single:
+        res = {k: (v[0] if v is not None else None) for k, v in res.items()}
+    return res

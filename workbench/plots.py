@@ -1,0 +1,74 @@
+"""Figures, read from the datasets only (never recomputed): references beside the computed curves,
+axes labelled with units."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+STYLE = {"analytic": dict(color="k", lw=1.5, ls="-"),
+         "fem": dict(color="tab:blue", marker="s", ms=4, ls="none"),
+         "csph": dict(color="tab:red", marker="o", ms=4, mfc="none", ls="none"),
+         "hpm": dict(color="tab:green", marker="^", ms=4, mfc="none", ls="none"),
+         "sph": dict(color="tab:purple", marker="x", ms=4, ls="none")}
+
+
+def _save(fig, path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def ss_curve(ds, outdir) -> Path:
+    """Cauchy stress against log strain and nominal stress against engineering strain, each method
+    beside the exact curve, and the relative error."""
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4.2))
+    eps = ds.strain.values
+    eng = ds.engineering_strain.values
+    exact = ds.stress.sel(solver="analytic").values
+    for s in ds.solver.values:
+        st = STYLE.get(str(s), {})
+        label = str(s) if s == "analytic" else f"{s} ({int(ds.resolution.sel(solver=s))}/edge)"
+        ax[0].plot(eps, ds.stress.sel(solver=s).values / 1e6, label=label, **st)
+        ax[1].plot(eng, ds.nominal_stress.sel(solver=s).values / 1e6, label=label, **st)
+        if s != "analytic":
+            err = np.abs(ds.stress.sel(solver=s).values - exact) / np.maximum(np.abs(exact), 1.0)
+            ax[2].semilogy(eps, np.maximum(err, 1e-17), label=str(s), **{**st, "ls": "-"})
+    ax[0].set(xlabel="logarithmic axial strain [-]", ylabel="Cauchy stress [MPa]",
+              title="uniaxial tension, Table 1 steel")
+    ax[1].set(xlabel="engineering strain [-]", ylabel="nominal stress [MPa]",
+              title="force over initial area")
+    ax[2].axhline(5e-3, color="grey", ls="--", label="gate 0.5 %")
+    ax[2].set(xlabel="logarithmic axial strain [-]", ylabel="relative error of Cauchy stress [-]",
+              title="error against the exact curve")
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    return _save(fig, Path(outdir) / "ss_curve.png")
+
+
+def accuracy_vs_cost(rows: list[dict], title: str, path, error_label: str) -> Path:
+    """Error against wall time, log–log, one line per method over its resolutions."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    for s in sorted({r["solver"] for r in rows}):
+        pts = sorted((r["wall_time"], r["error"], r["resolution"]) for r in rows
+                     if r["solver"] == s and np.isfinite(r["error"]) and r["wall_time"] > 0)
+        if not pts:
+            continue
+        t, e, res = zip(*pts)
+        st = {**STYLE.get(s, {}), "ls": "-"}
+        ax.loglog(t, np.maximum(e, 1e-16), label=s, **st)
+        for ti, ei, ri in pts:
+            ax.annotate(str(ri), (ti, max(ei, 1e-16)), fontsize=7, xytext=(3, 3),
+                        textcoords="offset points")
+    ax.set(xlabel="wall time [s]", ylabel=error_label, title=title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    return _save(fig, path)

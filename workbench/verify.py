@@ -1,0 +1,54 @@
+"""``workbench verify``: run the headline studies with every method that supports them, apply the
+accuracy gates, write the datasets, the figures (accuracy against cost included) and the report."""
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+from . import plots, report, results
+
+log = logging.getLogger("workbench")
+
+
+def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None) -> dict:
+    """Run one study and write ``STUDY.nc`` and its figures; returns the report section."""
+    import studies
+
+    study = studies.get(name)
+    ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick)
+    outdir = Path(outdir)
+    results.write(ds, outdir / f"{name}.nc")
+    figures = list(study.plot(ds, outdir))
+    rows = study.errors(ds)
+    label = getattr(study, "ERROR_LABEL", "max relative error [-]")
+    if rows:
+        figures.append(plots.accuracy_vs_cost(rows, f"{name}: accuracy against cost",
+                                              outdir / f"{name}_accuracy_vs_cost.png", label))
+    gates = study.gates(ds)
+    section = dict(name=name, gates=gates, rows=rows, figures=figures, error_label=label,
+                   verdict="PASS" if all(g.passed for g in gates) else "FAIL", dataset=ds)
+    if hasattr(study, "orders"):
+        section["orders"] = study.orders(ds)
+    if hasattr(study, "report_tables"):
+        section["tables"] = study.report_tables(ds)
+    if hasattr(study, "report_notes"):
+        section["notes"] = study.report_notes(ds)
+    return section
+
+
+def verify(outdir="results", quick: bool = False) -> int:
+    """Exit status: 0 if every gate passed, 1 otherwise."""
+    import studies
+
+    t0 = time.perf_counter()
+    sections = []
+    for name in studies.HEADLINE:
+        log.info("study %s%s", name, " (quick)" if quick else "")
+        sections.append(run_study(name, outdir, quick))
+        for g in sections[-1]["gates"]:
+            log.info("%s", g.line())
+    md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
+    failed = [g for s in sections for g in s["gates"] if not g.passed]
+    print(f"report: {md} ({len(failed)} gate(s) failed)")
+    return 1 if failed else 0
