@@ -13,7 +13,8 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import SSCurve
 
-from .common import Gate, check_resolutions, run_solver
+from .common import Gate, check_resolutions
+from .sweep import Task, run_tasks
 
 NAME = "ss_curve"
 SCENE = SSCurve
@@ -27,7 +28,8 @@ QUICK_RESOLUTIONS = {"fem": (1,), "csph": (3,)}
 TOL_REL = 5e-3
 
 
-def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: bool = False) -> xr.Dataset:
+def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: bool = False,
+        scheduler: str | None = None) -> xr.Dataset:
     """Run the study; returns the ``ss_curve`` dataset of the contract.
 
     ``resolutions``: None (the study's ladder), or a list applied to every discrete solver. The
@@ -44,6 +46,12 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
     strain = scene.strain_path()
     exact = analytic.uniaxial_curve(scene.material, strain)
 
+    ladders = {s: (check_resolutions(resolutions) if resolutions else
+                   list((QUICK_RESOLUTIONS if quick else RESOLUTIONS)[s]))
+               for s in solvers if s != "analytic"}
+    tasks = [Task.make(s, scene, r) for s, lad in ladders.items() for r in lad]
+    outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
+
     names, stress, nominal, wall, status, n_pts, res_used = [], [], [], [], [], [], []
     by_res = {}
     for s in solvers:
@@ -56,13 +64,10 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
             n_pts.append(0)
             res_used.append(0)
             continue
-        ladder = check_resolutions(resolutions) if resolutions else list(
-            (QUICK_RESOLUTIONS if quick else RESOLUTIONS)[s])
+        ladder = ladders[s]
         for r in ladder:
-            out = run_solver(s, scene, r)
-            sig = _on_grid(out, "stress", strain)
-            nom = _on_grid(out, "nominal_stress", strain)
-            by_res[(s, r)] = (sig, out)
+            out = outs[(s, r)]
+            by_res[(s, r)] = (_on_grid(out, "stress", strain), out)
         r = max(ladder)
         sig, out = by_res[(s, r)]
         names.append(s)

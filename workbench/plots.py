@@ -72,3 +72,76 @@ def accuracy_vs_cost(rows: list[dict], title: str, path, error_label: str) -> Pa
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     return _save(fig, path)
+
+
+def cantilever(ds, outdir) -> Path:
+    """Tip deflection over L against the load for each method (finest resolution) beside the
+    elastica and the linear theories, and the error against resolution."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    loads = ds.load.values
+    L = float(ds.attrs.get("param_L", 1.0))
+    fine = np.geomspace(max(loads.min(), 1e-3), loads.max(), 60)
+    from .analytic import elastica_tip, plane_moduli
+
+    Ep, _ = plane_moduli(ds.attrs["param_E"], ds.attrs["param_nu"], ds.attrs.get("plane", "strain"))
+    ax[0].plot(fine, [elastica_tip(p * ds.attrs["param_E"] / Ep)[0] for p in fine], "k-",
+               label="elastica (analytic)")
+    ax[0].plot(loads, ds.timoshenko.values / L, "k--", lw=0.8, label="Timoshenko (linear)")
+    for s in ds.solver.values:
+        if s == "analytic":
+            continue
+        v = ds.tip_deflection.sel(solver=s).values
+        ok = np.flatnonzero(np.isfinite(v).all(axis=1))
+        if ok.size:
+            j = ok[-1]
+            ax[0].plot(loads, v[j] / L, label=f"{s} ({int(ds.resolution.values[j])} across H)",
+                       **STYLE.get(str(s), {}))
+        ref = ds.fem_converged.values
+        for k, p in enumerate(loads):
+            e = np.abs(v[:, k] - ref[k]) / abs(ref[k])
+            good = np.isfinite(e) & (e > 0)
+            if good.any():
+                ax[1].loglog(ds.resolution.values[good], e[good],
+                             **{**STYLE.get(str(s), {}), "ls": "-"},
+                             label=f"{s}, P L²/EI = {p:.3g}", alpha=0.4 + 0.6 * k / max(1, len(loads) - 1))
+    ax[0].set(xscale="log", xlabel="load P L² / (E I) [-]", ylabel="tip deflection / L [-]",
+              title=f"cantilever, plane {ds.attrs.get('plane', 'strain')}")
+    ax[1].set(xlabel="elements or particles across H [-]",
+              ylabel="|δ − δ_FEM,converged| / δ_FEM,converged [-]", title="convergence")
+    for a in ax:
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=7)
+    return _save(fig, Path(outdir) / "cantilever.png")
+
+
+def plate(ds, outdir) -> Path:
+    """Tip displacement histories beside the thin-plate response, and the period against resolution
+    beside the FEM modal and thin-plate periods."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    t = ds.time.values
+    for s in ds.solver.values:
+        h = ds.tip_displacement.sel(solver=s).values
+        ok = np.flatnonzero(np.isfinite(h).any(axis=1))
+        if ok.size:
+            j = ok[-1]
+            label = "thin plate (analytic)" if s == "analytic" else f"{s} ({int(ds.resolution.values[j])} across H)"
+            st = {"color": STYLE.get(str(s), {}).get("color", "k"), "lw": 1.2 if s != "analytic" else 0.8,
+                  "ls": "--" if s == "analytic" else "-"}
+            ax[0].plot(t, h[j] * 1e3, label=label, **st)
+    ax[0].set(xlabel="time [s]", ylabel="tip displacement [mm]", title="plate, tip history")
+    res = ds.resolution.values
+    ax[1].axhline(ds.attrs["analytic_period"], color="k", ls="--", lw=0.8, label="thin plate")
+    ax[1].axhline(float(ds.fem_modal_converged), color="tab:blue", ls=":", label="FEM modal, converged")
+    for s in ds.solver.values:
+        if s == "analytic":
+            continue
+        v = ds.period.sel(solver=s).values
+        good = np.isfinite(v)
+        if good.any():
+            ax[1].plot(res[good], v[good], **{**STYLE.get(str(s), {}), "ls": "-"}, label=str(s))
+    ax[1].set(xscale="log", xlabel="particles or elements across H [-]", ylabel="period [s]",
+              title="period against resolution")
+    for a in ax:
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=7)
+    return _save(fig, Path(outdir) / "plate.png")

@@ -11,12 +11,14 @@ from . import plots, report, results
 log = logging.getLogger("workbench")
 
 
-def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None) -> dict:
+def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None,
+              scheduler: str | None = None) -> dict:
     """Run one study and write ``STUDY.nc`` and its figures; returns the report section."""
     import studies
 
     study = studies.get(name)
-    ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick)
+    ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick,
+                   scheduler=scheduler)
     outdir = Path(outdir)
     results.write(ds, outdir / f"{name}.nc")
     figures = list(study.plot(ds, outdir))
@@ -37,15 +39,19 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     return section
 
 
-def verify(outdir="results", quick: bool = False) -> int:
-    """Exit status: 0 if every gate passed, 1 otherwise."""
+def verify(outdir="results", quick: bool = False, scheduler: str | None = None) -> int:
+    """Exit status: 0 if every gate passed, 1 otherwise. The runs of a full verification go to a
+    local dask cluster of the machine's cores unless ``scheduler`` says otherwise ('serial', or
+    a scheduler address); ``--quick`` runs serially (a cluster's start-up would dominate)."""
+    if scheduler is None:
+        scheduler = "serial" if quick else "local"
     import studies
 
     t0 = time.perf_counter()
     sections = []
     for name in studies.HEADLINE:
         log.info("study %s%s", name, " (quick)" if quick else "")
-        sections.append(run_study(name, outdir, quick))
+        sections.append(run_study(name, outdir, quick, scheduler=scheduler))
         for g in sections[-1]["gates"]:
             log.info("%s", g.line())
     md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)

@@ -1,0 +1,199 @@
+"""Sweeps: each (scene, solver, resolution, options) run is one task.
+
+:func:`run_tasks` runs a list of tasks and returns their result dicts in order:
+
+- serially in this process (``scheduler='serial'``, the default for a single task),
+- on a local dask.distributed cluster of the machine's cores (``scheduler='local'``), one
+  single-threaded worker process per core (numba inside each worker then runs one thread, so the
+  cores are not oversubscribed),
+- or on an existing cluster (``scheduler='tcp://host:8786'``, ``workbench run --scheduler``).
+
+A failed task is a status in its result (``error: …``), never a lost sweep. Finished runs are kept in
+an on-disk cache keyed by the task's parameters and the code version (a hash of the package
+sources), so a re-run reuses them; ``WORKBENCH_CACHE`` moves the cache, ``WORKBENCH_NO_CACHE=1``
+disables it.
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import json
+import logging
+import os
+import pickle
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .common import run_solver
+
+log = logging.getLogger("workbench")
+PACKAGES = ("workbench", "sph", "fem_reference", "studies")
+
+
+@dataclass(frozen=True)
+class Task:
+    """One run: a solver on a scene at a resolution, with solver options."""
+
+    solver: str
+    scene: object
+    resolution: int
+    options: tuple = field(default=())  # sorted (name, value) pairs
+
+    @classmethod
+    def make(cls, solver, scene, resolution, **options) -> "Task":
+        return cls(solver, scene, int(resolution), tuple(sorted(options.items())))
+
+    def label(self) -> str:
+        return f"{self.scene.name} {self.solver} {self.resolution}"
+
+    def key(self) -> str:
+        payload = dict(solver=self.solver, scene=type(self.scene).__name__,
+                       params=dataclasses.asdict(self.scene), resolution=self.resolution,
+                       options=[list(o) for o in self.options], code=code_version())
+        return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:24]
+
+
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """A hash of every source file of the packages: any edit invalidates the cached runs."""
+    root = Path(__file__).resolve().parent.parent
+    h = hashlib.sha256()
+    for pkg in PACKAGES:
+        for p in sorted((root / pkg).rglob("*.py")):
+            h.update(p.relative_to(root).as_posix().encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def cache_dir() -> Path | None:
+    if os.environ.get("WORKBENCH_NO_CACHE") == "1":
+        return None
+    base = os.environ.get("WORKBENCH_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "particle-workbench")
+    return Path(base) / "runs"
+
+
+def _cache_get(task: Task):
+    d = cache_dir()
+    if d is None:
+        return None
+    p = d / f"{task.key()}.pkl"
+    if not p.exists():
+        return None
+    try:
+        with open(p, "rb") as fh:
+            return pickle.load(fh)
+    except Exception:  # a damaged entry is recomputed
+        return None
+
+
+def _cache_put(task: Task, out: dict) -> None:
+    d = cache_dir()
+    if d is None or not str(out.get("status", "")).startswith("ok"):
+        return  # failures are not cached: they are re-tried
+    d.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
+    with os.fdopen(fd, "wb") as fh:
+        pickle.dump(out, fh)
+    os.replace(tmp, d / f"{task.key()}.pkl")
+
+
+def execute(task: Task) -> dict:
+    """Run one task (in this process or on a worker)."""
+    return run_solver(task.solver, task.scene, task.resolution, **dict(task.options))
+
+
+def _single_thread_numba():
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except Exception:
+        pass
+    return True
+
+
+class Progress:
+    """A one-line progress bar on stderr (when it is a terminal) and a log line per finished run."""
+
+    def __init__(self, total: int, title: str):
+        self.total, self.done, self.title, self.t0 = total, 0, title, time.perf_counter()
+        self.tty = sys.stderr.isatty()
+
+    def update(self, task: Task, out: dict, cached: bool) -> None:
+        self.done += 1
+        status = out.get("status")
+        log.info("[%d/%d] %s: %s%s, %.2f s", self.done, self.total, task.label(),
+                 status if isinstance(status, str) else "see status",
+                 " (cached)" if cached else "", float(sum(__import__("numpy").atleast_1d(
+                     out.get("wall_time", 0.0)))) if not cached else 0.0)
+        if self.tty:
+            n = 30
+            k = int(n * self.done / max(self.total, 1))
+            sys.stderr.write(f"\r{self.title} [{'#' * k}{'.' * (n - k)}] {self.done}/{self.total} "
+                             f"{time.perf_counter() - self.t0:6.1f} s")
+            if self.done == self.total:
+                sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def default_scheduler() -> str:
+    return os.environ.get("WORKBENCH_SCHEDULER", "serial")
+
+
+def run_tasks(tasks: list[Task], scheduler: str | None = None, title: str = "sweep") -> list[dict]:
+    """Run ``tasks``; results in the same order. Cached runs are taken from the cache."""
+    scheduler = scheduler or default_scheduler()
+    results: list[dict | None] = [None] * len(tasks)
+    progress = Progress(len(tasks), title)
+    todo = []
+    for i, t in enumerate(tasks):
+        hit = _cache_get(t)
+        if hit is not None:
+            results[i] = hit
+            progress.update(t, hit, cached=True)
+        else:
+            todo.append(i)
+    if todo and (scheduler == "serial" or len(todo) == 1):
+        for i in todo:
+            out = execute(tasks[i])
+            _cache_put(tasks[i], out)
+            results[i] = out
+            progress.update(tasks[i], out, cached=False)
+    elif todo:
+        _run_on_dask([tasks[i] for i in todo], todo, results, scheduler, progress)
+    return results  # type: ignore[return-value]
+
+
+def _run_on_dask(tasks, index, results, scheduler, progress) -> None:
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    if scheduler == "local":
+        n = os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster)
+    else:
+        cluster = None
+        client = Client(scheduler)
+    try:
+        client.run(_single_thread_numba)
+        futures = {client.submit(execute, t, pure=False, key=f"run-{t.key()}-{k}"): (k, t)
+                   for k, t in zip(index, tasks)}
+        for fut in as_completed(futures):
+            k, t = futures[fut]
+            try:
+                out = fut.result()
+            except Exception as err:  # a worker died: the run is a status, the sweep goes on
+                out = {"status": f"error: worker failed: {type(err).__name__}: {err}"}
+            _cache_put(t, out)
+            results[k] = out
+            progress.update(t, out, cached=False)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
