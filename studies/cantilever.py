@@ -8,13 +8,15 @@ beam; Timoshenko and Euler–Bernoulli deflections are stored beside it. The con
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import xarray as xr
 
 from workbench import analytic, results
 from workbench.scenes import Cantilever
 
-from .common import Gate, check_resolutions, observed_order
+from .common import Gate, ladder, observed_order
 from .sweep import Task, run_tasks
 
 NAME = "cantilever"
@@ -48,8 +50,7 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
     if "fem" not in solvers:
         solvers.insert(1, "fem")  # the reference of every discrete run
     loads = np.asarray(scene.loads, float)
-    ladders = {s: (check_resolutions(resolutions) if resolutions and s != "fem" else
-                   list((QUICK_RESOLUTIONS if quick else RESOLUTIONS)[s]))
+    ladders = {s: ladder(s, resolutions, sys.modules[__name__], quick)
                for s in solvers if s != "analytic"}
     all_res = sorted({r for lad in ladders.values() for r in lad})
     shape = (len(solvers), len(all_res), len(loads))

@@ -95,3 +95,17 @@ def check_resolutions(resolutions) -> list[int]:
                              "body is not a discretisation)")
         out.append(r)
     return out
+
+
+def ladder(solver: str, resolutions, study, quick: bool) -> list[int]:
+    """The resolutions ``solver`` runs at: ``resolutions`` may be None (the study's ladder, or its
+    quick ladder), a list (every discrete solver but the FEM reference, which keeps its own), or a
+    dict solver -> list."""
+    default = list((study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS)[solver])
+    if resolutions is None:
+        return default
+    if isinstance(resolutions, dict):
+        return check_resolutions(resolutions.get(solver, default))
+    if solver == "fem" and study.NAME != "ss_curve":
+        return default
+    return check_resolutions(resolutions)

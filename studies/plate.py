@@ -8,13 +8,15 @@ size. Table I of 004 is reproduced as dimensionless period T c0 / L and amplitud
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import xarray as xr
 
 from workbench import analytic, results
 from workbench.scenes import Plate
 
-from .common import Gate, check_resolutions, observed_order
+from .common import Gate, ladder, observed_order
 from .sweep import Task, run_tasks
 
 NAME = "plate"
@@ -47,8 +49,7 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
         solvers.insert(0, "analytic")
     if "fem" not in solvers:
         solvers.insert(1, "fem")
-    ladders = {s: (check_resolutions(resolutions) if resolutions and s != "fem" else
-                   list((QUICK_RESOLUTIONS if quick else RESOLUTIONS)[s]))
+    ladders = {s: ladder(s, resolutions, sys.modules[__name__], quick)
                for s in solvers if s != "analytic"}
     all_res = sorted({r for lad in ladders.values() for r in lad})
     T0 = analytic.plate_period(scene)

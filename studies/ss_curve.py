@@ -7,13 +7,15 @@ or particles is all the scene needs: a linearly complete method reproduces it to
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import xarray as xr
 
 from workbench import analytic, results
 from workbench.scenes import SSCurve
 
-from .common import Gate, check_resolutions
+from .common import Gate, ladder
 from .sweep import Task, run_tasks
 
 NAME = "ss_curve"
@@ -46,8 +48,7 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
     strain = scene.strain_path()
     exact = analytic.uniaxial_curve(scene.material, strain)
 
-    ladders = {s: (check_resolutions(resolutions) if resolutions else
-                   list((QUICK_RESOLUTIONS if quick else RESOLUTIONS)[s]))
+    ladders = {s: ladder(s, resolutions, sys.modules[__name__], quick)
                for s in solvers if s != "analytic"}
     tasks = [Task.make(s, scene, r) for s, lad in ladders.items() for r in lad]
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
@@ -64,11 +65,10 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
             n_pts.append(0)
             res_used.append(0)
             continue
-        ladder = ladders[s]
-        for r in ladder:
+        for r in ladders[s]:
             out = outs[(s, r)]
             by_res[(s, r)] = (_on_grid(out, "stress", strain), out)
-        r = max(ladder)
+        r = max(ladders[s])
         sig, out = by_res[(s, r)]
         names.append(s)
         stress.append(sig)

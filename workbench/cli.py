@@ -69,7 +69,8 @@ def cmd_run(args) -> int:
 
     study, scene, resolutions = _validated(args)
     section = run_study(args.study, args.out, args.quick, solvers=args.solver,
-                        resolutions=resolutions, scene=scene, scheduler=args.scheduler)
+                        resolutions=resolutions, scene=scene, scheduler=args.scheduler,
+                        budget=args.budget)
     ds = section["dataset"]
     print(f"{args.study}: {Path(args.out) / (args.study + '.nc')}")
     for r in section["rows"]:
@@ -86,7 +87,7 @@ def cmd_run(args) -> int:
 def cmd_verify(args) -> int:
     from .verify import verify
 
-    return verify(args.out, args.quick, args.scheduler)
+    return verify(args.out, args.quick, args.scheduler, args.budget)
 
 
 def cmd_bench(args) -> int:
@@ -111,12 +112,16 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quick", action="store_true")
     r.add_argument("--scheduler", help="'serial' (default), 'local' (dask cluster of this machine's "
                                        "cores) or a dask scheduler address")
+    r.add_argument("--budget", type=float, default=0.0,
+                   help="seconds for extending an unsettled convergence ladder (default 0: off)")
     r.set_defaults(fn=cmd_run)
     v = sub.add_parser("verify", help="run the headline studies, apply the gates, write the report")
     v.add_argument("--quick", action="store_true")
     v.add_argument("--out", default="results")
     v.add_argument("--scheduler", help="'local' (default; 'serial' with --quick) or a dask "
                                        "scheduler address")
+    v.add_argument("--budget", type=float, default=0.0,
+                   help="seconds for extending unsettled convergence ladders (default 0: off)")
     v.set_defaults(fn=cmd_verify)
     b = sub.add_parser("bench", help="particle-steps per second of the plate time loop")
     b.add_argument("--solver", action="append")

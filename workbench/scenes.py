@@ -164,7 +164,7 @@ class SSCurve(Scene):
     eps_L: float = param(math.inf, "-", "damage limit plastic strain (inf: no damage)", lo=0, lo_open=True)
     size: float = param(1e-3, "m", "edge of the cubic block (a)", lo=0, lo_open=True)
     max_strain: float = param(0.3, "-", "final logarithmic axial strain", lo=0, hi=2, lo_open=True)
-    n_steps: int = param(60, "-", "load steps to max_strain", lo=1, hi=100000)
+    n_steps: int = param(60, "-", "load steps past twice the yield strain (4 more before)", lo=1, hi=100000)
     unload: bool = param(False, "-", "add an unload-reload cycle at the end")
     unload_by: float = param(0.003, "-", "log strain removed by the unloading (about the elastic "
                                          "strain at yield: a larger value yields in compression)",
@@ -185,7 +185,13 @@ class SSCurve(Scene):
         unload–reload cycle), starting after 0."""
         import numpy as np
 
-        up = np.linspace(0, self.max_strain, self.n_steps + 1)[1:]
+        # four steps through the elastic range (to twice the yield strain), then uniform steps
+        e_y = 2 * self.C * self.eps0 ** self.n / self.E
+        if e_y < 0.5 * self.max_strain:
+            up = np.concatenate([np.linspace(0, e_y, 5)[1:],
+                                 np.linspace(e_y, self.max_strain, self.n_steps + 1)[1:]])
+        else:
+            up = np.linspace(0, self.max_strain, self.n_steps + 1)[1:]
         if not self.unload:
             return up
         k = max(2, self.n_steps // 6)
