@@ -59,3 +59,20 @@ def test_observed_order_least_squares():
     h = np.array([0.1, 0.05, 0.025, 0.0125])
     assert common.observed_order(h, 3 * h ** 2) == pytest.approx(2.0, abs=1e-12)
     assert np.isnan(common.observed_order(h[:2], h[:2]))
+
+
+def test_local_dask_cluster_runs_sweep_and_keeps_failures(tmp_path, monkeypatch):
+    # two real FEM runs of the homogeneous block and one that fails (an unknown solver entry):
+    # all three come back, in order, the failure as a status
+    from workbench.scenes import SSCurve
+
+    monkeypatch.setenv("WORKBENCH_NO_CACHE", "1")
+    monkeypatch.setitem(common.SOLVER_ENTRY, "broken", "no_such_module:solve")
+    scene = SSCurve(n_steps=4, max_strain=0.02)
+    tasks = [sweep.Task.make("fem", scene, 1), sweep.Task.make("broken", scene, 1),
+             sweep.Task.make("fem", scene, 2)]
+    serial = sweep.run_tasks([tasks[0]], "serial")[0]
+    out = sweep.run_tasks(tasks, "local")
+    assert out[0]["status"] == "ok" and out[2]["status"] == "ok"
+    assert out[1]["status"].startswith("error:")
+    assert np.allclose(out[0]["stress"], serial["stress"], rtol=1e-12)
