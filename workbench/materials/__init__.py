@@ -74,10 +74,18 @@ class Material:
 
     @classmethod
     def mooney_rivlin(cls, c1: float, c2: float, lam: float, rho: float = 1000.0) -> "Material":
-        """004 eq. 12: ψ = ½c1 I1 + ½c2 I2 − [3/2 c1 I3^{1/3} + 3/2 c2 I3^{2/3} − λ/4 (ln I3)²]."""
+        """004 eq. 12: ψ = ½c1 I1 + ½c2 I2 − [3/2 c1 I3^{1/3} + 3/2 c2 I3^{2/3} − λ/4 (ln I3)²].
+
+        Linearised at C = I: S = 2(c1 + c2) ε + (2λ − ⅔(c1 + c2)) tr ε I, i.e. shear modulus
+        μ = c1 + c2 and bulk modulus K = 2λ (under pure dilation ψ = λ (ln J)²); the λ of eq. 12
+        is not the Lamé λ. E and ν below are those small-strain moduli.
+        """
+        if not lam > 0:
+            raise ValueError(f"lam: {lam} Pa is not allowed; the λ of eq. 12 must be > 0")
         mu = c1 + c2
-        E = mu * (3 * lam + 2 * mu) / (lam + mu)
-        nu = lam / (2 * (lam + mu))
+        K = 2 * lam
+        E = 9 * K * mu / (3 * K + mu)
+        nu = (3 * K - 2 * mu) / (2 * (3 * K + mu))
         return cls(law="mooney_rivlin", E=E, nu=nu, rho=rho, c1=c1, c2=c2, lam_mr=lam).validated()
 
     @classmethod
