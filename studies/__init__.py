@@ -6,9 +6,12 @@ import importlib
 
 STUDIES = {
     "ss_curve": "studies.ss_curve",
+    "cantilever": "studies.cantilever",
+    "plate": "studies.plate",
+    "stability": "studies.stability",
 }
 # The studies that `workbench verify` runs, in order.
-HEADLINE = ("ss_curve",)
+HEADLINE = ("ss_curve", "cantilever", "plate", "stability")
 
 
 def get(name: str):

@@ -1,0 +1,295 @@
+"""Static equilibrium: Newton–Raphson with a line search, load stepping with step cutting.
+
+A :class:`Problem` is a discretisation with a material, the 2-D idealisation, the Dirichlet DOFs
+with their values as a function of the load parameter λ, and the external force f_ext(λ). Its
+state (u, history and F33 at the points) is committed only at a converged load step, so that a
+failed step is retried from the last converged state with a smaller increment.
+
+Newton: K_ff Δu_f = −r_f with r = f_int(u) − f_ext(λ); the step length α comes from a secant line
+search on g(α) = Δu·r(u + αΔu) (Crisfield, *Non-linear FEA of solids and structures*, vol. 1,
+§9.3); the full step is taken whenever it reduces |g| enough, so the convergence stays quadratic
+near the solution. A trial state with J ≤ 0 at any point, or a material point that failed, halves
+α.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .assembly import Discretisation
+from .constitutive import update
+from workbench.materials import Material
+
+
+@dataclass
+class State:
+    """The committed state: displacement u (N,), history (points, n_history), F33 (points,)."""
+
+    u: np.ndarray
+    history: np.ndarray
+    F33: np.ndarray
+
+
+@dataclass
+class Problem:
+    disc: Discretisation
+    material: Material
+    plane: str | None  # 'strain', 'stress' or None in 3-D
+    fixed_values: Callable[[float], np.ndarray]  # λ -> values of disc.fixed (len(disc.fixed),)
+    f_ext: Callable[[float], np.ndarray]  # λ -> (N,)
+
+    def initial_state(self) -> State:
+        n = self.disc.nel * self.disc.nqp
+        return State(np.zeros(self.disc.N), self.material.initial_history(n), np.ones(n))
+
+    def evaluate(self, u: np.ndarray, state: State, tangent: bool = True) -> dict:
+        """Material update from the committed ``state`` at displacement u: P, A, new history,
+        status, F33, J (points), f_int (N,)."""
+        H = self.disc.displacement_gradient(u)
+        out = update(self.material, H, state.history, self.plane, tangent=tangent, F33=state.F33)
+        d = self.disc.d
+        Fd = H + np.eye(d)
+        J = np.linalg.det(Fd) * (out["F33"] if d == 2 else 1.0)
+        out["J"] = J
+        out["ok"] = bool(np.all(J > 0) and np.all(np.isfinite(out["P"])) and np.all(out["status"] == 0))
+        out["f_int"] = self.disc.internal_force(out["P"]) if out["ok"] else None
+        return out
+
+
+@dataclass
+class NewtonResult:
+    converged: bool
+    u: np.ndarray
+    point_state: dict
+    residuals: list = field(default_factory=list)  # ‖r_f‖ per iteration (relative)
+    iterations: int = 0
+    assembly_time: float = 0.0
+    solve_time: float = 0.0
+    reason: str = ""
+
+
+def linear_solve(K, b):
+    """Sparse direct solve of K x = b (SuperLU, minimum-degree ordering on AᵀA+A, which suits the
+    structurally symmetric tangent). A CSR K is factorised as the CSC matrix Kᵀ without a copy and
+    solved with trans='T'."""
+    if sp.isspmatrix_csr(K):
+        return spla.splu(K.T, permc_spec="MMD_AT_PLUS_A").solve(b, trans="T")
+    return spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(b)
+
+
+class TangentSolver:
+    """Solves the Newton systems K Δu = b of one run.
+
+    Direct (SuperLU) by default. With ``reuse`` (the default above ``reuse_above`` unknowns), the
+    last LU factors precondition GMRES on the new tangent; the tangent is factorised again only
+    when GMRES has not reached the tolerance in ``max_krylov`` iterations. Newton asks for the
+    forcing term η = min(1e-3, 0.1 ‖r‖/scale) (Eisenstat & Walker 1996): with η = O(‖r‖) the
+    convergence stays quadratic while most factorisations of a load or time step are saved.
+    """
+
+    def __init__(self, reuse: bool | None = None, reuse_above: int = 20000, rtol: float = 1e-11,
+                 max_krylov: int = 12):
+        self.reuse, self.reuse_above, self.rtol, self.max_krylov = reuse, reuse_above, rtol, max_krylov
+        self.lu = None
+        self.factorisations = 0
+        self.krylov_iterations = 0
+
+    def _factor(self, K):
+        self.factorisations += 1
+        if sp.isspmatrix_csr(K):
+            lu = spla.splu(K.T, permc_spec="MMD_AT_PLUS_A")
+            self.lu = lambda x: lu.solve(x, trans="T")
+        else:
+            lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A")
+            self.lu = lu.solve
+
+    def solve(self, K, b, rtol: float | None = None, near: bool = True):
+        """x with ‖K x − b‖ ≤ rtol ‖b‖ (rtol defaults to the solver's own). ``near``: the tangent
+        is close to the last factorised one (Newton near convergence), worth a Krylov try."""
+        rtol = self.rtol if rtol is None else rtol
+        reuse = self.reuse if self.reuse is not None else K.shape[0] > self.reuse_above
+        if reuse and near and self.lu is not None:
+            M = spla.LinearOperator(K.shape, matvec=self.lu, dtype=float)
+            count = [0]
+
+            def cb(_):
+                count[0] += 1
+
+            x, info = spla.gmres(K, b, M=M, rtol=rtol, atol=0.0, restart=self.max_krylov,
+                                 maxiter=1, callback=cb, callback_type="pr_norm")
+            self.krylov_iterations += count[0]
+            if info == 0:
+                return x
+        self._factor(K)
+        return self.lu(b)
+
+
+def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: float = 1e-9,
+           maxit: int = 25, extra_matrix=None, extra_rhs: Callable | None = None,
+           solver: TangentSolver | None = None) -> NewtonResult:
+    """Solve r(u) = f_int(u) − f_ext(λ) [+ extra_rhs(u)] = 0 on the free DOFs from the guess u0
+    (fixed DOFs already set in u0). ``extra_matrix`` (free × free) is added to the tangent and
+    ``extra_rhs(u)`` (N,) to the residual (the inertia of an implicit time step). ``solver``
+    (a :class:`TangentSolver`, kept across the steps of a run) solves the linear systems."""
+    solver = TangentSolver() if solver is None else solver
+    disc = problem.disc
+    free = disc.free
+    fext = problem.f_ext(lam)
+    u = u0.copy()
+    res = NewtonResult(False, u, {})
+    t0 = time.perf_counter()
+    pt = problem.evaluate(u, state, tangent=True)
+    res.assembly_time += time.perf_counter() - t0
+    if not pt["ok"]:
+        res.reason = "initial guess inverts an element or fails a material point"
+        return res
+    scale = None
+    for it in range(maxit + 1):
+        r = pt["f_int"] - fext
+        if extra_rhs is not None:
+            r = r + extra_rhs(u)
+        rf = r[free]
+        if scale is None:
+            # force scale: applied load, or the reactions of a displacement-driven step
+            scale = max(np.linalg.norm(fext), np.linalg.norm(pt["f_int"]), np.linalg.norm(r),
+                        1e-300)
+        rn = np.linalg.norm(rf) / scale
+        res.residuals.append(float(rn))
+        if not np.isfinite(rn):
+            res.reason = "non-finite residual"
+            return res
+        if rn <= rtol:
+            res.converged = True
+            break
+        if it >= 2 and rn <= 1e3 * rtol and rn > 0.5 * res.residuals[-2]:
+            # stagnation at the round-off floor (F = I + H carries H to ~1e-16/|H| only)
+            res.converged = True
+            res.reason = "converged to the round-off floor"
+            break
+        if it == maxit:
+            res.reason = f"no convergence in {maxit} iterations (residual {rn:.2e})"
+            break
+        t0 = time.perf_counter()
+        K = disc.tangent(pt["A"])
+        if extra_matrix is not None:
+            K = K + extra_matrix
+        t1 = time.perf_counter()
+        # near convergence the tangent barely changes: the last factors precondition GMRES
+        du_f = solver.solve(K, -rf, rtol=min(1e-3, 0.1 * rn), near=rn < 1e-2)
+        res.solve_time += time.perf_counter() - t1
+        res.assembly_time += t1 - t0
+        du = np.zeros_like(u)
+        du[free] = du_f
+        # line search on g(α) = Δu·r(u + αΔu)
+        g0 = float(du_f @ rf)
+        alpha, trial, best = 1.0, None, None
+        lo_a, lo_g = 0.0, g0
+        t0 = time.perf_counter()
+        for _ in range(8):
+            ut = u + alpha * du
+            pt_t = problem.evaluate(ut, state, tangent=True)
+            if not pt_t["ok"]:
+                alpha *= 0.5
+                continue
+            rt = pt_t["f_int"] - fext
+            if extra_rhs is not None:
+                rt = rt + extra_rhs(ut)
+            g = float(du_f @ rt[free])
+            if best is None or abs(g) < best[0]:
+                best = (abs(g), ut, pt_t)
+            if abs(g) <= 0.8 * abs(g0) or alpha < 0.05:
+                trial = (ut, pt_t)
+                break
+            # secant between the last two points, kept inside [0.1 α, 1]
+            a_new = alpha - g * (alpha - lo_a) / (g - lo_g) if g != lo_g else 0.5 * alpha
+            lo_a, lo_g = alpha, g
+            alpha = float(np.clip(a_new, 0.1 * alpha, 1.0))
+        if trial is None and best is not None:
+            trial = best[1:]  # no sufficient decrease: the best admissible point found
+        res.assembly_time += time.perf_counter() - t0
+        if trial is None:
+            res.reason = "line search found no admissible step (J <= 0 or material failure)"
+            res.iterations = it + 1
+            return res
+        u, pt = trial
+        res.iterations = it + 1
+    res.u, res.point_state = u, pt
+    return res
+
+
+def commit(state: State, res: NewtonResult) -> State:
+    return State(res.u.copy(), res.point_state["history"].copy(), res.point_state["F33"].copy())
+
+
+def load_path(problem: Problem, targets, max_increment: float = np.inf, min_increment: float = 1e-6,
+              rtol: float = 1e-9, maxit: int = 25, callback: Callable | None = None,
+              solver: TangentSolver | None = None):
+    """Follow λ = 0 → targets[0] → targets[1] … in increments of at most ``max_increment``,
+    halving an increment whose Newton fails (down to ``min_increment`` relative to the target),
+    predicting each step by extrapolating the last converged increment.
+
+    Calls ``callback(k, lam, state, newton_results)`` when target k is reached. Returns a list of
+    dicts per target: lam, converged, status, residual_history (list of lists, one per increment),
+    iterations, wall_time (cumulative, s), assembly_time, solve_time.
+    """
+    state = problem.initial_state()
+    disc = problem.disc
+    solver = TangentSolver() if solver is None else solver
+    lam = 0.0
+    prev = None  # (lam, u) of the previous converged increment
+    out = []
+    t_start = time.perf_counter()
+    failed = False
+    for k, target in enumerate(targets):
+        rec = dict(lam=float(target), converged=False, status="", residual_history=[], iterations=0,
+                   assembly_time=0.0, solve_time=0.0, newton_iterations=[])
+        if failed:
+            rec["status"] = "diverged: an earlier load failed"
+            rec["wall_time"] = np.nan
+            out.append(rec)
+            continue
+        step = min(max_increment, abs(target - lam))
+        while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
+            new = lam + np.sign(target - lam) * min(step, abs(target - lam))
+            u0 = state.u.copy()
+            if prev is not None and prev[0] != lam:
+                u0 = state.u + (new - lam) / (lam - prev[0]) * (state.u - prev[1])
+            u0[disc.fixed] = problem.fixed_values(new)
+            res = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
+            if not res.converged and prev is not None:
+                # retry from the last converged state without the predictor
+                u0 = state.u.copy()
+                u0[disc.fixed] = problem.fixed_values(new)
+                res2 = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
+                res2.assembly_time += res.assembly_time
+                res2.solve_time += res.solve_time
+                res = res2
+            rec["assembly_time"] += res.assembly_time
+            rec["solve_time"] += res.solve_time
+            rec["iterations"] += res.iterations
+            if res.converged:
+                rec["residual_history"].append(res.residuals)
+                rec["newton_iterations"].append(res.iterations)
+                prev = (lam, state.u.copy())
+                state = commit(state, res)
+                lam = new
+                step = min(max_increment, 1.5 * step)
+            else:
+                step *= 0.5
+                if step < min_increment * max(1.0, abs(target)):
+                    rec["status"] = f"diverged at load {new:.6g}: {res.reason}"
+                    failed = True
+                    break
+        rec["wall_time"] = time.perf_counter() - t_start
+        if not failed:
+            rec["converged"] = True
+            rec["status"] = "ok"
+            if callback is not None:
+                callback(k, lam, state)
+        out.append(rec)
+    return out, state

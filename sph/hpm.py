@@ -1,0 +1,634 @@
+"""Hamiltonian particle method (HPM; Suzuki & Koshizuka 2008, as used in 004 §II), 2-D plane strain,
+total Lagrangian.
+
+Everything weight-related is computed once in the reference configuration X (the *Lagrangian
+kernel*): neighbours within the influence radius r_e (:mod:`sph.neighbours`), the weights
+
+    w_ij = 1 − |X_ij|²/r_e²  for |X_ij| < r_e, 0 otherwise            (eq. 6, X_ij = X_j − X_i)
+
+and the moment matrices A_i = Σ_j w_ij X_ij ⊗ X_ij (eq. 5, :func:`reference_geometry`). Then per
+evaluation:
+
+* the deformation gradient by weighted least squares, F_i = (Σ_j w_ij x_ij ⊗ X_ij) A_i⁻¹ (eq. 4):
+  exact for every affine motion on any particle arrangement (F is 3×3, F33 = 1, plane strain);
+* P_i = F_i S_i from the shared material library
+  (:func:`workbench.materials.kernels.material_point`: SVK eq. 11, Mooney–Rivlin-like eq. 12);
+* the force as the exact derivative of the discrete Hamiltonian H = ½ Σ m_i v_i² + Σ_i V_i ψ(F_i):
+  since ∂F_i/∂x_k = Σ_j (δ_jk − δ_ik) e ⊗ A_i⁻¹ X_ij w_ij,
+
+      f_i = −∂H/∂x_i = Σ_j w_ij (M_i + M_j) X_ij,   M_i = V_i P_i A_i⁻¹       (eq. 7 times m_i)
+
+  (:func:`internal_force`). The pair term is antisymmetric (X_ji = −X_ij, the bracket symmetric), so
+  Σ f = 0 exactly; H is invariant under rigid rotations of x, so the torque vanishes too.
+
+Zero-energy-mode stabilisation (after Kondo, Suzuki & Koshizuka 2010, who add to the Hamiltonian a
+potential that penalises the particle motion the affine map F_i does not see): we use
+
+    H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|²,   c_i = α G V_i / Σ_j w_ij |X_ij|²
+
+with α = ``stabilisation`` (0: off) and G the small-strain shear modulus. Because F_i minimises
+Σ_j w_ij |x_ij − F X_ij|² (that is eq. 4), ∂H_s/∂F_i = 0 and the force is simply
+f_i += 2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)], antisymmetric, conservative and
+objective: energy and both momenta stay conserved. (The exact normalisation of Kondo et al. was not
+available here; this is our formulation of the same idea, stated so it can be checked.)
+
+Time integration: the symplectic scheme of eq. 8 (x^{n+1} = x^n + Δt v^n, v^{n+1} = v^n + Δt a^{n+1}).
+Its positions are those of the leapfrog; we run it in the kick–drift–kick (velocity Verlet) form of
+the shared :mod:`sph.integrate` (``scheme="verlet"``, default) so that velocities — and hence the
+reported energies — are synchronous with positions; ``scheme="euler"`` runs eq. 8 literally.
+
+:func:`solve` dispatches on the scene (Plate, Cantilever, and the stability scenes of
+:mod:`workbench.stability_scenes`).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+
+from workbench.materials.kernels import material_point
+
+from . import lattice
+from .diagnostics import strain_energy
+from .integrate import cfl_time_step, kick_drift_row, kick_row
+from .kernels import JIT
+from .neighbours import neighbour_list
+
+N_CHUNKS = 64
+"""Work items of the chunked parallel loops (each allocates its 3×3 scratch once)."""
+RE_RATIO = 2.1
+"""Default influence radius r_e over the particle spacing (eq. 6)."""
+
+
+# ================================================================================================
+# Reference configuration (eq. 5, 6)
+# ================================================================================================
+
+@njit(parallel=True, **JIT)
+def reference_geometry(X, indptr, indices, re, X_ij, w, Ainv, wr2):
+    """Fill, per pair p of the CSR list, X_ij[p] = X_j − X_i and w[p] (eq. 6); per particle the
+    inverse moment matrix Ainv[i] = A_i⁻¹ (eq. 5) and wr2[i] = Σ_j w_ij |X_ij|². Returns the number
+    of particles whose A_i is singular (fewer than two independent neighbour directions)."""
+    N = X.shape[0]
+    bad = np.zeros(N, np.int64)
+    for i in prange(N):
+        a00 = 0.0
+        a01 = 0.0
+        a11 = 0.0
+        s = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            j = indices[p]
+            dx = X[j, 0] - X[i, 0]
+            dy = X[j, 1] - X[i, 1]
+            r2 = dx * dx + dy * dy
+            wij = 1.0 - r2 / (re * re) if r2 < re * re else 0.0
+            X_ij[p, 0] = dx
+            X_ij[p, 1] = dy
+            w[p] = wij
+            a00 += wij * dx * dx
+            a01 += wij * dx * dy
+            a11 += wij * dy * dy
+            s += wij * r2
+        det = a00 * a11 - a01 * a01
+        wr2[i] = s
+        if not det > 1e-12 * (a00 * a11 + 1e-300):
+            bad[i] = 1
+            Ainv[i, 0, 0] = 0.0
+            Ainv[i, 0, 1] = 0.0
+            Ainv[i, 1, 0] = 0.0
+            Ainv[i, 1, 1] = 0.0
+        else:
+            Ainv[i, 0, 0] = a11 / det
+            Ainv[i, 1, 1] = a00 / det
+            Ainv[i, 0, 1] = -a01 / det
+            Ainv[i, 1, 0] = -a01 / det
+    return bad.sum()
+
+
+# ================================================================================================
+# Per evaluation: F (eq. 4), stress (shared library), force (eq. 7)
+# ================================================================================================
+
+@njit(inline="always", **JIT)
+def _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F):
+    """F (3×3, F33 = 1) of particle i by weighted least squares (eq. 4)."""
+    b00 = 0.0
+    b01 = 0.0
+    b10 = 0.0
+    b11 = 0.0
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        wij = w[p]
+        ux = wij * (x[j, 0] - x[i, 0])
+        uy = wij * (x[j, 1] - x[i, 1])
+        b00 += ux * X_ij[p, 0]
+        b01 += ux * X_ij[p, 1]
+        b10 += uy * X_ij[p, 0]
+        b11 += uy * X_ij[p, 1]
+    F[0, 0] = b00 * Ainv[i, 0, 0] + b01 * Ainv[i, 1, 0]
+    F[0, 1] = b00 * Ainv[i, 0, 1] + b01 * Ainv[i, 1, 1]
+    F[1, 0] = b10 * Ainv[i, 0, 0] + b11 * Ainv[i, 1, 0]
+    F[1, 1] = b10 * Ainv[i, 0, 1] + b11 * Ainv[i, 1, 1]
+    F[0, 2] = 0.0
+    F[1, 2] = 0.0
+    F[2, 0] = 0.0
+    F[2, 1] = 0.0
+    F[2, 2] = 1.0
+
+
+@njit(parallel=True, **JIT)
+def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_new, status):
+    """For every particle: F_i (eq. 4) into F_all (N,3,3), P_i from the shared material library, and
+    M_i = V_i P_i A_i⁻¹ (N,2,2) — the per-particle factor of eq. 7. ``status`` (N,) gets the
+    material routine's return code (0 ok)."""
+    N = x.shape[0]
+    chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    for c in prange(N_CHUNKS):
+        F = np.empty((3, 3))
+        P = np.empty((3, 3))
+        A = np.empty((3, 3, 3, 3))
+        for i in range(c * chunk, min(N, (c + 1) * chunk)):
+            _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F)
+            status[i] = material_point(F, h_old[i], prm, P, h_new[i], A, False)
+            for k in range(3):
+                for l in range(3):
+                    F_all[i, k, l] = F[k, l]
+            for k in range(2):
+                M[i, k, 0] = V[i] * (P[k, 0] * Ainv[i, 0, 0] + P[k, 1] * Ainv[i, 1, 0])
+                M[i, k, 1] = V[i] * (P[k, 0] * Ainv[i, 0, 1] + P[k, 1] * Ainv[i, 1, 1])
+
+
+@njit(inline="always", **JIT)
+def _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs):
+    """f_i = Σ_j w_ij (M_i + M_j) X_ij (eq. 7) plus, for cs ≠ 0, the stabilisation force."""
+    fx = 0.0
+    fy = 0.0
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        wij = w[p]
+        X0 = X_ij[p, 0]
+        X1 = X_ij[p, 1]
+        fx += wij * ((M[i, 0, 0] + M[j, 0, 0]) * X0 + (M[i, 0, 1] + M[j, 0, 1]) * X1)
+        fy += wij * ((M[i, 1, 0] + M[j, 1, 0]) * X0 + (M[i, 1, 1] + M[j, 1, 1]) * X1)
+        if cs[i] != 0.0 or cs[j] != 0.0:
+            x0 = x[j, 0] - x[i, 0]
+            x1 = x[j, 1] - x[i, 1]
+            di0 = x0 - (F_all[i, 0, 0] * X0 + F_all[i, 0, 1] * X1)
+            di1 = x1 - (F_all[i, 1, 0] * X0 + F_all[i, 1, 1] * X1)
+            dj0 = x0 - (F_all[j, 0, 0] * X0 + F_all[j, 0, 1] * X1)
+            dj1 = x1 - (F_all[j, 1, 0] * X0 + F_all[j, 1, 1] * X1)
+            fx += 2.0 * wij * (cs[i] * di0 + cs[j] * dj0)
+            fy += 2.0 * wij * (cs[i] * di1 + cs[j] * dj1)
+    return fx, fy
+
+
+@njit(parallel=True, **JIT)
+def internal_force(x, indptr, indices, X_ij, w, M, F_all, cs):
+    """Internal forces (N,2), N (per unit thickness): −∂(Σ V ψ + H_s)/∂x."""
+    N = x.shape[0]
+    f = np.empty((N, 2))
+    for i in prange(N):
+        fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs)
+        f[i, 0] = fx
+        f[i, 1] = fy
+    return f
+
+
+@njit(parallel=True, **JIT)
+def stabilisation_energy(x, indptr, indices, X_ij, w, F_all, cs):
+    """H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|², J per unit thickness."""
+    N = x.shape[0]
+    e = np.zeros(N)
+    for i in prange(N):
+        if cs[i] == 0.0:
+            continue
+        s = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            j = indices[p]
+            d0 = x[j, 0] - x[i, 0] - (F_all[i, 0, 0] * X_ij[p, 0] + F_all[i, 0, 1] * X_ij[p, 1])
+            d1 = x[j, 1] - x[i, 1] - (F_all[i, 1, 0] * X_ij[p, 0] + F_all[i, 1, 1] * X_ij[p, 1])
+            s += w[p] * (d0 * d0 + d1 * d1)
+        e[i] = cs[i] * s
+    return e.sum()
+
+
+@njit(parallel=True, **JIT)
+def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping,
+             indptr, indices, X_ij, w, Ainv, V, h_old, prm, cs, F_all, M, h_new, status):
+    """``n_steps`` steps of eq. 8 (``euler``) or its kick–drift–kick form, in place. Returns the
+    number of steps completed (fewer if a material point failed or a position became non-finite)."""
+    N = x.shape[0]
+    for s in range(n_steps):
+        if euler:
+            for i in prange(N):
+                for k in range(2):
+                    if fixed[i, k]:
+                        v[i, k] = v_fix[i, k]
+                    x[i, k] += dt * v[i, k]
+        else:
+            for i in prange(N):
+                kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
+        stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_new, status)
+        bad = 0
+        for i in prange(N):
+            fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs)
+            acc[i, 0] = fx / m[i] + a_ext[i, 0]
+            acc[i, 1] = fy / m[i] + a_ext[i, 1]
+            if euler:
+                for k in range(2):
+                    if fixed[i, k]:
+                        v[i, k] = v_fix[i, k]
+                    else:
+                        v[i, k] = (v[i, k] + dt * acc[i, k]) / (1.0 + damping * dt)
+            else:
+                kick_row(i, v, acc, fixed, v_fix, dt, damping)
+            if status[i] != 0 or not (math.isfinite(acc[i, 0]) and math.isfinite(acc[i, 1])):
+                bad += 1
+        if bad > 0:
+            return s + 1
+    return n_steps
+
+
+# ================================================================================================
+# A body and its dynamics
+# ================================================================================================
+
+@dataclass
+class Model:
+    """An HPM body: reference geometry and the constant arrays of the loops.
+
+    X (N,2) m, V (N,) m², m (N,) kg/m, CSR neighbours (indptr, indices) within r_e, per pair X_ij
+    (nnz,2) and w (nnz,), Ainv (N,2,2), stabilisation coefficients cs (N,), material ``prm``."""
+
+    X: np.ndarray
+    V: np.ndarray
+    m: np.ndarray
+    dx: float
+    re: float
+    indptr: np.ndarray
+    indices: np.ndarray
+    X_ij: np.ndarray
+    w: np.ndarray
+    Ainv: np.ndarray
+    cs: np.ndarray
+    prm: np.ndarray
+    material: object
+    n_singular: int = 0
+
+    @property
+    def n(self) -> int:
+        return self.X.shape[0]
+
+
+def build(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
+          body=None) -> Model:
+    """Reference configuration of an HPM body (eq. 5–6). ``body`` (N,) int, optional: particles
+    of different bodies never interact through the weights (separate bodies, e.g. two rings)."""
+    if not (isinstance(re_ratio, (int, float)) and 1.0 < re_ratio <= 6.0):
+        raise ValueError(f"re_ratio: {re_ratio!r} is not allowed; r_e/Δx must lie in (1, 6]")
+    if not (isinstance(stabilisation, (int, float)) and 0.0 <= stabilisation <= 10.0):
+        raise ValueError(f"stabilisation: {stabilisation!r} is not allowed; must lie in [0, 10]")
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    re = re_ratio * dx
+    indptr, indices = neighbour_list(X, re)
+    if body is not None:
+        indptr, indices = _drop_cross_body(indptr, indices, np.asarray(body))
+    nnz = len(indices)
+    X_ij = np.empty((nnz, 2))
+    w = np.empty(nnz)
+    Ainv = np.empty((X.shape[0], 2, 2))
+    wr2 = np.empty(X.shape[0])
+    bad = reference_geometry(X, indptr, indices, re, X_ij, w, Ainv, wr2)
+    cs = np.zeros(X.shape[0])
+    if stabilisation > 0:
+        cs = stabilisation * material.mu * V / np.maximum(wr2, 1e-300)
+    return Model(X, V, material.rho * V, dx, re, indptr, indices, X_ij, w, Ainv, cs,
+                 material.params(), material, int(bad))
+
+
+def _drop_cross_body(indptr, indices, body):
+    """The CSR list without the pairs whose particles belong to different bodies."""
+    N = len(indptr) - 1
+    rows = np.repeat(np.arange(N), np.diff(indptr))
+    keep = body[rows] == body[indices]
+    new_ptr = np.zeros_like(indptr)
+    np.cumsum(np.bincount(rows[keep], minlength=N), out=new_ptr[1:])
+    return new_ptr, np.ascontiguousarray(indices[keep])
+
+
+@dataclass
+class State:
+    """Synchronous state: positions x (N,2), velocities v (N,2), accelerations acc (N,2), time t;
+    the last F (N,3,3), M (N,2,2), material status (N,) and history."""
+
+    x: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray
+    t: float
+    F: np.ndarray
+    M: np.ndarray
+    status: np.ndarray
+    h: np.ndarray
+    h_new: np.ndarray
+    steps: int = 0
+
+
+def forces(model: Model, x: np.ndarray, state: State | None = None) -> np.ndarray:
+    """Internal forces (N,2) at positions x (eq. 7 plus the optional stabilisation)."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    N = model.n
+    F = np.empty((N, 3, 3))
+    M = np.empty((N, 2, 2))
+    status = np.zeros(N, np.int64)
+    nh = model.material.n_history
+    h = np.zeros((N, nh)) if state is None else state.h
+    h_new = np.zeros((N, nh))
+    stress_pass(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V, h,
+                model.prm, F, M, h_new, status)
+    if state is not None:
+        state.F[:] = F
+        state.M[:] = M
+        state.status[:] = status
+    return internal_force(x, model.indptr, model.indices, model.X_ij, model.w, M, F, model.cs)
+
+
+def potential_energy(model: Model, x: np.ndarray) -> float:
+    """The potential part of the discrete Hamiltonian, Σ V_i ψ(F_i) + H_s, J per unit thickness."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    N = model.n
+    F = np.empty((N, 3, 3))
+    M = np.empty((N, 2, 2))
+    status = np.zeros(N, np.int64)
+    nh = model.material.n_history
+    stress_pass(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V,
+                np.zeros((N, nh)), model.prm, F, M, np.zeros((N, nh)), status)
+    e = strain_energy(F, model.V, model.prm)
+    if model.cs.any():
+        e += stabilisation_energy(x, model.indptr, model.indices, model.X_ij, model.w, F, model.cs)
+    return float(e)
+
+
+def init(model: Model, v0: np.ndarray | None = None, x0: np.ndarray | None = None) -> State:
+    """State at t = 0 with the accelerations of the initial configuration."""
+    N = model.n
+    x = np.array(model.X if x0 is None else x0, dtype=np.float64)
+    v = np.zeros((N, 2)) if v0 is None else np.array(v0, dtype=np.float64)
+    nh = model.material.n_history
+    st = State(x, v, np.zeros((N, 2)), 0.0, np.empty((N, 3, 3)), np.empty((N, 2, 2)),
+               np.zeros(N, np.int64), model.material.initial_history(N), np.zeros((N, nh)))
+    st.acc[:] = forces(model, x, st) / model.m[:, None]
+    return st
+
+
+def advance(model: Model, st: State, dt: float, n_steps: int, fixed=None, v_fix=None,
+            a_ext=None, damping: float = 0.0, scheme: str = "verlet") -> int:
+    """Advance ``st`` by ``n_steps`` steps of size dt (s). ``fixed`` (N,2) uint8 dofs follow
+    ``v_fix``; ``a_ext`` (N,2) m/s² external acceleration. Returns the steps completed."""
+    if scheme not in ("verlet", "euler"):
+        raise ValueError(f"scheme: {scheme!r} is not one of 'verlet', 'euler'")
+    N = model.n
+    fixed = np.zeros((N, 2), np.uint8) if fixed is None else fixed
+    v_fix = np.zeros((N, 2)) if v_fix is None else v_fix
+    a_ext = np.zeros((N, 2)) if a_ext is None else a_ext
+    done = _advance(n_steps, scheme == "euler", st.x, st.v, st.acc, model.m, a_ext, fixed, v_fix,
+                    dt, damping, model.indptr, model.indices, model.X_ij, model.w, model.Ainv,
+                    model.V, st.h, model.prm, model.cs, st.F, st.M, st.h_new, st.status)
+    if model.material.n_history:
+        st.h[:] = st.h_new
+    st.t += done * dt
+    st.steps += done
+    return done
+
+
+def energies(model: Model, st: State) -> tuple[float, float]:
+    """(kinetic, potential) energy of the state, J per unit thickness."""
+    ke = 0.5 * float(np.sum(model.m[:, None] * st.v * st.v))
+    return ke, potential_energy(model, st.x)
+
+
+def time_step(model: Model, dt_factor: float) -> float:
+    """dt = dt_factor · Δx / c_p (shared CFL estimate; c_p the P-wave speed, plane strain)."""
+    return cfl_time_step(model.dx, model.material.wave_speed("strain"), dt_factor)
+
+
+# ================================================================================================
+# Observables shared by the particle drivers of this module and sph.classic
+# ================================================================================================
+
+def period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
+    """Period (s) from the zero crossings of u(t) after t = 0 (linear interpolation, least-squares
+    slope of crossing time against index = half a period) and amplitude max |u| (m)."""
+    t = np.asarray(t, float)
+    u = np.asarray(u, float)
+    amp = float(np.nanmax(np.abs(u))) if len(u) else float("nan")
+    t1, y1 = t[1:], u[1:]
+    i = np.flatnonzero(np.sign(y1[:-1]) * np.sign(y1[1:]) < 0)
+    tc = t1[i] - y1[i] * (t1[i + 1] - t1[i]) / (y1[i + 1] - y1[i])
+    if len(tc) < 2:
+        return float("nan"), amp
+    return float(2 * np.polyfit(np.arange(len(tc)), tc, 1)[0]), amp
+
+
+def probe(ps, name: str, x: np.ndarray, comp: int) -> float:
+    idx, wts = ps.probes[name]
+    return float(np.dot(wts, x[idx, comp] - ps.X[idx, comp]))
+
+
+def _check_dt_factor(dt_factor):
+    if not (isinstance(dt_factor, (int, float)) and math.isfinite(dt_factor) and 0 < dt_factor <= 10):
+        raise ValueError(f"dt_factor: {dt_factor!r} is not allowed; the time step over the CFL "
+                         "estimate must lie in (0, 10]")
+
+
+# ================================================================================================
+# Scenes
+# ================================================================================================
+
+def solve(scene, resolution: int, **options) -> dict:
+    """Run HPM on ``scene`` at ``resolution`` (particles across the thickness H, or the scene's own
+    resolution measure). See :func:`solve_plate`, :func:`solve_cantilever` and
+    :mod:`sph.stability` for the keys."""
+    from workbench.scenes import Cantilever, Plate
+
+    if isinstance(scene, Plate):
+        return solve_plate(scene, resolution, **options)
+    if isinstance(scene, Cantilever):
+        return solve_cantilever(scene, resolution, **options)
+    from . import stability
+
+    if stability.is_stability_scene(scene):
+        return stability.solve("hpm", scene, resolution, **options)
+    raise ValueError(f"scene: {type(scene).__name__} has no HPM driver")
+
+
+def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
+                re_ratio: float = RE_RATIO, stabilisation: float = 0.0, scheme: str = "verlet",
+                n_out: int = 400, periods: float | None = None, energy_growth: float = 0.5,
+                mode: str = "node") -> dict:
+    """The oscillating plate (004 D): particles of :func:`sph.lattice.plate`, the clamp block fixed,
+    initial velocity of eq. 13 (Gray et al.'s mode shape).
+
+    ``mode="node"`` (default) puts particles on the free surfaces with trapezoid volumes. The WLS
+    gradient (eq. 4) is only first-order accurate at a free surface (the one-sided stencil sees the
+    bending strain of a point about r_e/3 inside); on the ``cell`` lattice the outermost particles
+    sit Δx/2 inside the surface and the pure-bending energy at H/Δx = 10, r_e = 2.1Δx is 7 % low
+    (period +6 %), on the node lattice 1.4 % low (measured, tests/test_hpm.py).
+
+    Returns dict(period (s, zero crossings of the tip history), amplitude (m, max |tip
+    displacement|), time, tip_displacement (m, +Y, probe ``tip_mid``), kinetic_energy,
+    strain_energy (J per unit thickness, incl. the stabilisation potential), energy_drift
+    (relative change of the total energy), dt, steps, wall_time (time loop, s), n_particles,
+    status). A blow-up (material failure, NaN, total energy grown by more than ``energy_growth``
+    relative) ends the run with status 'unstable: <reason> at t=…'.
+    """
+    from workbench import analytic
+
+    dt_factor = scene.dt_factor if dt_factor is None else dt_factor
+    _check_dt_factor(dt_factor)
+    ps = lattice.plate(scene, resolution, mode=mode)
+    mat = scene.material
+    model = build(ps.X, ps.V, mat, ps.dx, re_ratio, stabilisation)
+    v0 = np.zeros_like(ps.X)
+    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
+    v0[ps.sets["fixed"]] = 0.0
+    fixed = np.zeros((ps.n, 2), np.uint8)
+    fixed[ps.sets["fixed"]] = 1
+    st = init(model, v0)
+    dt = time_step(model, dt_factor)
+    t_end = (scene.periods if periods is None else periods) * analytic.plate_period(scene)
+    return _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth)
+
+
+def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, a_ext=None):
+    n_steps = int(math.ceil(t_end / dt))
+    per = max(1, n_steps // n_out)
+    times, tip, kes, pes = [0.0], [0.0], [], []
+    ke, pe = energies(model, st)
+    kes.append(ke)
+    pes.append(pe)
+    e0 = ke + pe
+    status = "ok"
+    wall = 0.0
+    done_total = 0
+    while done_total < n_steps:
+        k = min(per, n_steps - done_total)
+        t0 = time.perf_counter()
+        done = advance(model, st, dt, k, fixed=fixed, a_ext=a_ext, scheme=scheme)
+        wall += time.perf_counter() - t0
+        done_total += done
+        if done < k or not np.isfinite(st.x).all():
+            reason = "material point failed (J <= 0 or no convergence)" if st.status.any() else "non-finite state"
+            status = f"unstable: {reason} at t={st.t:.4g} s"
+            break
+        ke, pe = energies(model, st)
+        times.append(st.t)
+        tip.append(probe(ps, "tip_mid", st.x, 1))
+        kes.append(ke)
+        pes.append(pe)
+        if e0 > 0 and abs(ke + pe - e0) > energy_growth * e0:
+            status = f"unstable: total energy changed by {(ke + pe - e0) / e0:+.3g} at t={st.t:.4g} s"
+            break
+    t = np.asarray(times)
+    u = np.asarray(tip)
+    T, A = period_amplitude(t, u) if status == "ok" else (float("nan"), float("nan"))
+    ke_a, pe_a = np.asarray(kes), np.asarray(pes)
+    e = ke_a + pe_a
+    return dict(period=T, amplitude=A, time=t, tip_displacement=u, kinetic_energy=ke_a,
+                strain_energy=pe_a, energy_drift=float((e[-1] - e[0]) / e[0]) if e[0] else float("nan"),
+                dt=dt, steps=int(st.steps), wall_time=wall, n_particles=int(model.n), status=status,
+                particle_steps_per_second=model.n * st.steps / wall if wall > 0 else float("nan"),
+                n_singular=model.n_singular)
+
+
+def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_ratio: float = RE_RATIO,
+                     stabilisation: float = 0.0, rtol: float = 1e-5, max_steps: int = 400000,
+                     mode: str = "node") -> dict:
+    """Static tip-loaded cantilever (004 E) by dynamic relaxation: the HPM dynamics with
+    mass-proportional damping c = 2 ω₁ (about critical for the first bending mode, ω₁ from the
+    Euler–Bernoulli beam), each load of ``scene.loads`` applied as equal forces on the tip column
+    (uniform shear traction), continued from the previous load, until the tip velocity scale
+    |Δtip|/Δt over a window falls below rtol · tip · ω₁.
+
+    Returns dict(load (dimensionless), tip_deflection (m, positive downward), tip_horizontal (m,
+    shortening), wall_time (s, per load), n_particles, status (per load), steps (per load)).
+    """
+    from workbench import analytic
+
+    _check_dt_factor(dt_factor)
+    ps = lattice.cantilever(scene, resolution, mode=mode)
+    mat = scene.material
+    model = build(ps.X, ps.V, mat, ps.dx, re_ratio, stabilisation)
+    fixed = np.zeros((ps.n, 2), np.uint8)
+    fixed[ps.sets["fixed"]] = 1
+    st = init(model)
+    dt = time_step(model, dt_factor)
+    Ep, _ = analytic.plane_moduli(scene.E, scene.nu, scene.plane)
+    omega1 = 1.875104 ** 2 * math.sqrt(Ep * scene.I / (mat.rho * scene.H * scene.L ** 4))
+    damping = 2.0 * omega1
+    tip = ps.sets["tip"]
+    loads = list(scene.loads)
+    out = dict(load=np.array(loads), tip_deflection=np.full(len(loads), np.nan),
+               tip_horizontal=np.full(len(loads), np.nan), wall_time=np.zeros(len(loads)),
+               n_particles=int(model.n), status=["not run"] * len(loads), steps=np.zeros(len(loads), int))
+    window = max(50, int(0.25 * 2 * math.pi / omega1 / dt))
+    for k, load in enumerate(loads):
+        t0 = time.perf_counter()
+        a_ext = np.zeros((ps.n, 2))
+        a_ext[tip, 1] = -scene.force(load) / len(tip) / model.m[tip]
+        status = "ok"
+        prev = probe(ps, "tip_mid", st.x, 1)
+        steps = 0
+        while True:
+            done = advance(model, st, dt, window, fixed=fixed, a_ext=a_ext, damping=damping)
+            steps += done
+            cur = probe(ps, "tip_mid", st.x, 1)
+            if done < window or not np.isfinite(cur):
+                status = f"unstable: non-finite state at t={st.t:.4g} s"
+                break
+            if abs(cur - prev) <= rtol * max(abs(cur), 1e-30) and steps > 4 * window:
+                break
+            if steps >= max_steps:
+                status = f"diverged: no static equilibrium after {steps} steps"
+                break
+            prev = cur
+        out["wall_time"][k] = time.perf_counter() - t0
+        out["steps"][k] = steps
+        out["status"][k] = status
+        if status != "ok":
+            break
+        out["tip_deflection"][k] = -probe(ps, "tip_mid", st.x, 1)
+        out["tip_horizontal"][k] = -probe(ps, "tip_mid", st.x, 0)
+    return out
+
+
+def bench(n_particles: int = 100_000, threads: int = 1, steps: int = 100) -> dict:
+    """Particle-steps per second of the plate's time loop (:func:`_advance`) at about
+    ``n_particles`` particles (node lattice) on ``threads`` numba threads, after a JIT warm-up.
+    Returns dict(particle_steps_per_second, n_particles, steps, loop_time, threads)."""
+    import numba
+
+    from workbench import analytic
+    from workbench.scenes import Plate
+
+    from .bench import plate_resolution
+
+    numba.set_num_threads(threads)
+    scene = Plate()
+    ps = lattice.plate(scene, plate_resolution(n_particles), mode="node")
+    model = build(ps.X, ps.V, scene.material, ps.dx)
+    v0 = np.zeros_like(ps.X)
+    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
+    fixed = np.zeros((ps.n, 2), np.uint8)
+    fixed[ps.sets["fixed"]] = 1
+    st = init(model, v0)
+    dt = time_step(model, scene.dt_factor)
+    advance(model, st, dt, 2, fixed=fixed)
+    t0 = time.perf_counter()
+    done = advance(model, st, dt, steps, fixed=fixed)
+    loop = time.perf_counter() - t0
+    return dict(particle_steps_per_second=model.n * done / loop, n_particles=model.n, steps=done,
+                loop_time=loop, threads=threads)

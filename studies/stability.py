@@ -1,0 +1,167 @@
+"""Stability study: where the particle methods fail (scenes.md, "Stability scenes"; issue 5).
+
+For every particle method and scene (``ring``, ``slab``, ``rings``, ``plate``) and every time-step
+factor of the ladder, one run is classified as stable or not by the criteria of
+:mod:`sph.stability` (non-finite state or failed material point; energy balance off by more than
+50 %; particle disorder η₉₅ > 0.15), and its energy drift is recorded. ``max_stable_dt_factor`` is
+the largest factor below which every run of the ladder was stable. The plate uses the methods' own
+plate drivers (criteria: non-finite state, total energy changed by more than 50 %).
+
+Method options of this study (recorded in the attributes): ``hpm`` runs the stability scenes with
+the zero-energy-mode stabilisation α = 1 (without it the ring's point loads excite the zero-energy
+modes, see tests/test_stability.py) and the plate without it; ``sph`` uses the Eulerian cubic
+spline, h = 1.3Δx, Monaghan viscosity α = β = 1, no artificial stress, and the hyperelastic stress
+path (F from Ḟ = L F, stress from the shared library) in the stability scenes, the hypoelastic
+Jaumann path on the plate. ``csph`` is asked through its own ``solve``; a scene it has no driver
+for is recorded as an error status, not a crash.
+"""
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from workbench import results
+from workbench.scenes import Plate
+from workbench.stability_scenes import Ring, Rings, Slab
+
+from .common import Gate, run_solver
+
+NAME = "stability"
+SCENE = Ring
+SOLVERS = ("hpm", "sph", "csph")
+SCENES = ("ring", "slab", "rings", "plate")
+DT_FACTORS = (0.3, 0.6, 1.0, 1.5)
+QUICK_DT_FACTORS = (0.3, 1.0)
+# scene name -> (scene, resolution, quick resolution, end-time override (full, quick))
+SETUP = {
+    "ring": (Ring(), 8, 6, (0.05, 0.01)),
+    "slab": (Slab(), 10, 6, (None, 0.05)),
+    "rings": (Rings(), 5, 4, (None, 0.03)),
+    "plate": (Plate(), 10, 5, (2.0, 0.5)),
+}
+OPTIONS = {"hpm": {"stabilisation": 1.0}, "sph": {}, "csph": {}}
+PLATE_OPTIONS = {"hpm": {}, "sph": {}, "csph": {}}
+
+
+def _one(solver, name, dt_factor, quick):
+    import dataclasses
+
+    scene, res, qres, (t_full, t_quick) = SETUP[name]
+    t_end = t_quick if quick else t_full
+    r = qres if quick else res
+    if name == "plate":
+        sc = dataclasses.replace(scene, dt_factor=dt_factor,
+                                 periods=t_end if t_end is not None else scene.periods)
+        return run_solver(solver, sc, r, **PLATE_OPTIONS[solver])
+    fields = {"dt_factor": dt_factor}
+    if t_end is not None:
+        fields["t_end"] = t_end
+    sc = dataclasses.replace(scene, **fields)
+    return run_solver(solver, sc, r, **OPTIONS[solver])
+
+
+def run(scene=None, solvers=None, resolutions=None, quick: bool = False) -> xr.Dataset:
+    """Sweep (solver × scene × dt_factor). ``scene`` and ``resolutions`` are accepted for the
+    common study signature; the scenes and resolutions of this study are fixed in ``SETUP``."""
+    solvers = list(solvers or SOLVERS)
+    for s in solvers:
+        if s not in SOLVERS:
+            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
+    factors = list(QUICK_DT_FACTORS if quick else DT_FACTORS)
+    shp = (len(solvers), len(SCENES), len(factors))
+    stable = np.zeros(shp, bool)
+    drift = np.full(shp, np.nan)
+    disorder = np.full(shp, np.nan)
+    wall = np.full(shp, np.nan)
+    status = np.full(shp, "not run", dtype=object)
+    for i, s in enumerate(solvers):
+        for j, name in enumerate(SCENES):
+            for k, f in enumerate(factors):
+                out = _one(s, name, f, quick)
+                st = out["status"] if isinstance(out["status"], str) else str(out["status"])
+                status[i, j, k] = st
+                stable[i, j, k] = bool(out.get("stable", st == "ok")) and st == "ok"
+                drift[i, j, k] = out.get("energy_drift", np.nan)
+                disorder[i, j, k] = out.get("disorder", np.nan)
+                wall[i, j, k] = float(np.sum(out.get("wall_time", np.nan)))
+    max_stable = np.full(shp[:2], np.nan)
+    for i in range(shp[0]):
+        for j in range(shp[1]):
+            ok = [f for k, f in enumerate(factors) if all(stable[i, j, :k + 1])]
+            max_stable[i, j] = max(ok) if ok else 0.0
+    ds = xr.Dataset(
+        {
+            "stable": (("solver", "scene", "dt_factor"), stable, {"units": "-", "long_name":
+                       "run stayed stable (criteria in the attribute 'criterion')"}),
+            "max_stable_dt_factor": (("solver", "scene"), max_stable, {"units": "-", "long_name":
+                                     "largest dt factor of the ladder with every smaller one stable (0: none)"}),
+            "energy_drift": (("solver", "scene", "dt_factor"), drift, {"units": "-", "long_name":
+                             "relative change of the total energy (balance incl. dead-load work) over the run; NaN for the kinematically driven slab"}),
+            "disorder": (("solver", "scene", "dt_factor"), disorder, {"units": "-", "long_name":
+                         "particle disorder eta95 at the end (sph.stability)"}),
+            "wall_time": (("solver", "scene", "dt_factor"), wall, {"units": "s"}),
+            "status": (("solver", "scene", "dt_factor"), status.astype(str), {"units": "-"}),
+        },
+        coords={"solver": solvers, "scene": list(SCENES),
+                "dt_factor": ("dt_factor", np.array(factors), {"units": "-", "long_name":
+                              "time step over the CFL estimate dx/c_p"})},
+    )
+    ds.attrs.update(results.provenance(NAME, None))
+    ds.attrs.update(
+        criterion="unstable if: non-finite state or failed material point; |energy balance change| > "
+                  "0.5 of the largest energy seen; particle disorder eta95 > 0.15 (sph.stability)",
+        plane="strain", quick=int(quick),
+        options_hpm="stabilisation=1 in ring/slab/rings, 0 on the plate; r_e = 2.1 dx",
+        options_sph="cubic spline h = 1.3 dx, alpha = beta = 1, no artificial stress; hyperelastic "
+                    "stress path in ring/slab/rings, hypoelastic Jaumann on the plate",
+        resolutions=str({k: (v[2] if quick else v[1]) for k, v in SETUP.items()}),
+    )
+    return ds
+
+
+def errors(ds: xr.Dataset) -> list[dict]:
+    return []
+
+
+def gates(ds: xr.Dataset) -> list[Gate]:
+    """Issue 5: the ring stable with the Lagrangian kernel (hpm) and not with the Eulerian one
+    (sph); the slab's tensile instability of classic SPH recorded as unstable (at the smallest
+    dt factor, so that it is not a time-step effect)."""
+    g = []
+    f0 = float(ds.dt_factor.values[0])
+    sol = list(ds.solver.values)
+    if "hpm" in sol:
+        v = bool(ds.stable.sel(solver="hpm", scene="ring", dt_factor=f0))
+        g.append(Gate.at_most("stability: hpm ring unstable at the smallest dt factor (0 = stable)",
+                              0.0 if v else 1.0, 0.0, "Lagrangian kernel: no clumping (004 A)"))
+    if "sph" in sol:
+        v = bool(ds.stable.sel(solver="sph", scene="ring", dt_factor=f0))
+        g.append(Gate.at_most("stability: sph ring stable at the smallest dt factor (0 = clumps)",
+                              1.0 if v else 0.0, 0.0, "Eulerian kernel: clumping expected (Rabczuk et al. 2004)"))
+        v = bool(ds.stable.sel(solver="sph", scene="slab", dt_factor=f0))
+        g.append(Gate.at_most("stability: sph slab stable at the smallest dt factor (0 = unstable)",
+                              1.0 if v else 0.0, 0.0, "tensile instability of classic SPH (Swegle)"))
+    return g
+
+
+def plot(ds: xr.Dataset, outdir) -> list:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from pathlib import Path
+
+    fig, ax = plt.subplots(figsize=(6, 3))
+    m = ds.max_stable_dt_factor.values
+    im = ax.imshow(m, cmap="viridis", vmin=0, vmax=float(ds.dt_factor.max()))
+    ax.set_xticks(range(len(ds.scene)), [str(s) for s in ds.scene.values])
+    ax.set_yticks(range(len(ds.solver)), [str(s) for s in ds.solver.values])
+    for i in range(m.shape[0]):
+        for j in range(m.shape[1]):
+            ax.text(j, i, f"{m[i, j]:g}", ha="center", va="center", color="w")
+    fig.colorbar(im, ax=ax, label="max stable dt factor")
+    fig.tight_layout()
+    path = Path(outdir) / "stability_max_dt.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return [path]

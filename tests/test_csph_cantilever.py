@@ -1,0 +1,41 @@
+"""Static cantilever (004 E) with CSPH: tip deflection within 3 % of the FEM at H/Δx = 10 for the
+paper's small load and the large loads (issue 4 item 6); dynamic relaxation agrees with Newton;
+the small-load result against beam theory."""
+import numpy as np
+import pytest
+
+from sph import csph
+from workbench.analytic import cantilever_tip
+from workbench.scenes import Cantilever
+
+TIP_GATE = 0.03  # issue 4: within 3 % of the FEM at H/Δx = 10
+
+
+def test_cantilever_tip_gate_h10():
+    fem = pytest.importorskip("fem_reference")
+    scene = Cantilever()
+    r = csph.solve(scene, 10)
+    assert r["status"] == ["ok"] * len(scene.loads)
+    ref = fem.reference(scene, "tip_deflection")
+    err = r["tip_deflection"] / ref - 1
+    assert np.abs(err).max() < TIP_GATE, err  # measured −0.23 … +0.35 %
+    ref_h = fem.reference(scene, "tip_horizontal")
+    # the shortening is second order in the deflection: 1 % at the large loads, 1 % at the small
+    assert np.abs(r["tip_horizontal"][1:] / ref_h[1:] - 1).max() < 0.03
+    assert np.all(np.diff(r["wall_time"]) >= 0)
+    # small load: Timoshenko beam theory within 3 % (the clamp and 2-D effects are below that)
+    assert abs(r["tip_deflection"][0] / cantilever_tip(scene, scene.loads[0]) - 1) < 0.03
+
+
+def test_dynamic_relaxation_agrees_with_newton():
+    scene = Cantilever(loads=(1.0,))
+    newton = csph.solve(scene, 4)
+    dr = csph.solve(scene, 4, method="dr", tol=1e-6)  # DR stops at a residual of 1e-4 P
+    assert newton["status"] == ["ok"] and dr["status"] == ["ok"]
+    # measured agreement 3e-6 (71 000 DR steps, 2 s, against 0.5 s for Newton)
+    assert abs(dr["tip_deflection"][0] / newton["tip_deflection"][0] - 1) < 1e-3
+
+
+def test_plane_stress_is_refused_clearly():
+    with pytest.raises(ValueError, match="plane"):
+        csph.solve(Cantilever(plane="stress"), 4)

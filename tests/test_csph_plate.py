@@ -1,0 +1,86 @@
+"""Oscillating plate (004 D) with CSPH: energy conservation of the undamped symplectic run, the
+period and amplitude gates against the FEM at H/Δx = 10 (issue 4 item 6), convergence of the
+period with refinement, a blow-up reported as a status, the hourglass option."""
+import math
+
+import numpy as np
+import pytest
+
+from sph import csph
+from workbench.analytic import plate_amplitude
+from workbench.scenes import Plate
+
+PERIOD_GATE = 0.03     # issue 4: period within 3 % of the FEM modal period at H/Δx = 10
+AMPLITUDE_GATE = 0.05  # issue 4: amplitude within 5 %
+ENERGY_GATE = 1e-3     # issue 4: total energy within 0.1 % over two periods without damping
+
+
+def fem_period(scene):
+    fem = pytest.importorskip("fem_reference")
+    return fem.reference(scene, "period")
+
+
+def test_energy_conserved_over_two_periods_coarse():
+    # H/Δx = 4 keeps it fast; velocity Verlet's energy error is bounded (symplectic) and
+    # O(dt²): measured 6e-6 of the initial energy at dt_factor 0.3
+    r = csph.solve(Plate(), 4)
+    assert r["status"] == "ok"
+    E = r["kinetic_energy"] + r["strain_energy"]
+    assert r["energy_time"][-1] >= 2 * 0.25
+    drift = (E.max() - E.min()) / E[0]
+    assert drift < ENERGY_GATE, drift
+    assert np.isfinite(r["period"])
+
+
+def test_plate_period_and_amplitude_gate_h10():
+    scene = Plate()
+    r = csph.solve(scene, 10)
+    assert r["status"] == "ok"
+    T_fem = fem_period(scene)
+    err_T = r["period"] / T_fem - 1
+    assert abs(err_T) < PERIOD_GATE, err_T  # measured −0.19 %
+    # amplitude against the FEM's dynamic run (cached; measured −0.4 %) and, looser, the linear
+    # thin-plate value V_f c0/ω (measured −0.8 %)
+    fem = pytest.importorskip("fem_reference")
+    err_A = r["amplitude"] / fem.reference(scene, "amplitude") - 1
+    assert abs(err_A) < AMPLITUDE_GATE, err_A
+    assert abs(r["amplitude"] / plate_amplitude(scene) - 1) < AMPLITUDE_GATE
+    E = r["kinetic_energy"] + r["strain_energy"]
+    assert (E.max() - E.min()) / E[0] < ENERGY_GATE
+
+
+def test_period_converges_with_refinement():
+    """Linearised (modal) period of the discrete plate at H/Δx = 5, 10, 20: successive differences
+    shrink by more than 3× (observed order > 1.5; measured ≈ 2.5) and the finest is within 0.5 %
+    of the FEM (measured +0.18 %; the CSPH limit lies 0.16 % above the FEM's)."""
+    scene = Plate()
+    T = np.array([csph.modal_period(scene, r)[0] for r in (5, 10, 20)])
+    d1, d2 = abs(T[1] - T[0]), abs(T[2] - T[1])
+    order = math.log2(d1 / d2)
+    assert order > 1.5, (T, order)
+    assert abs(T[2] / fem_period(scene) - 1) < 5e-3, T
+
+
+def test_dynamic_period_matches_modal_period():
+    """The explicit run's zero-crossing period equals the linearised one to the nonlinearity of the
+    0.12 L amplitude (measured 0.01 % at H/Δx = 5)."""
+    scene = Plate()
+    r = csph.solve(scene, 5, periods=1.2)
+    T = csph.modal_period(scene, 5)[0]
+    assert abs(r["period"] / T - 1) < 5e-3
+
+
+def test_blow_up_is_a_status_not_an_exception():
+    r = csph.solve(Plate(), 4, dt_factor=3.0, periods=0.2)
+    assert r["status"].startswith("unstable:") and "at t=" in r["status"], r["status"]
+    assert math.isnan(r["period"])
+
+
+def test_hourglass_control_reduces_the_spurious_mode_measure():
+    scene = Plate()
+    off = csph.solve(scene, 5, periods=0.6)
+    on = csph.solve(scene, 5, periods=0.6, hourglass=1.0)
+    assert on["status"] == off["status"] == "ok"
+    assert on["hourglass_strain"].max() < off["hourglass_strain"].max()
+    E = on["kinetic_energy"] + on["strain_energy"]
+    assert (E.max() - E.min()) / E[0] < ENERGY_GATE  # the hourglass energy is conservative

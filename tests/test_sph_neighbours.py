@@ -1,0 +1,33 @@
+"""The cell-list neighbour search equals a brute-force search (random clouds, a lattice with
+pairs at exactly the cut-off, 2-D and 3-D), and is symmetric."""
+import numpy as np
+import pytest
+
+from sph import lattice
+from sph.neighbours import brute_force, neighbour_list
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("radius", [0.05, 0.13, 0.4])
+def test_random_cloud_equals_brute_force(dim, radius):
+    x = np.random.default_rng(dim).random((700, dim)) * np.array([1.0, 0.5, 0.3][:dim])
+    p1, i1 = neighbour_list(x, radius)
+    p2, i2 = brute_force(x, radius)
+    assert np.array_equal(p1, p2) and np.array_equal(i1, i2)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_lattice_with_ties_and_symmetry(dim):
+    X, _ = lattice.grid((0,) * dim, (1,) * dim, 0.125, "node")
+    for radius in (0.25, 0.26, 0.125 * 2.2):  # 0.25 = 2Δx exactly: strict '<' excludes it
+        p1, i1 = neighbour_list(X, radius)
+        p2, i2 = brute_force(X, radius)
+        assert np.array_equal(p1, p2) and np.array_equal(i1, i2)
+    a = np.repeat(np.arange(len(X)), np.diff(p1))
+    pairs = set(zip(a.tolist(), i1.tolist()))
+    assert all((b, c) in pairs for c, b in pairs)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="radius"):
+        neighbour_list(np.zeros((3, 2)), 0.0)

@@ -1,0 +1,45 @@
+"""`workbench verify --quick`, the main job, end to end: exit status, report, datasets per the
+contract, accuracy-versus-cost figures."""
+import os
+import subprocess
+import sys
+
+import pytest
+import xarray as xr
+
+import studies
+
+
+@pytest.fixture(scope="module")
+def verified(tmp_path_factory):
+    out = tmp_path_factory.mktemp("verify")
+    env = dict(os.environ, WORKBENCH_CACHE=str(out / "cache"))
+    proc = subprocess.run([sys.executable, "-m", "workbench.cli", "verify", "--quick", "--out", str(out)],
+                          capture_output=True, text=True, env=env, timeout=900)
+    return out, proc
+
+
+def test_verify_quick_passes_its_gates(verified):
+    out, proc = verified
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    md = (out / "report.md").read_text()
+    assert "FAIL" not in md
+    assert (out / "report.html").read_text().startswith("<!doctype html>")
+
+
+@pytest.mark.parametrize("study", studies.HEADLINE)
+def test_datasets_follow_the_contract(verified, study):
+    out, _ = verified
+    with xr.open_dataset(out / f"{study}.nc") as ds:
+        assert "solver" in ds.coords and "analytic" in ds.solver.values
+        for key in ("study", "workbench_version", "git_revision", "date", "cpu_count"):
+            assert key in ds.attrs
+        for name, var in ds.data_vars.items():
+            assert "units" in var.attrs, name
+        required = {"ss_curve": ("stress", "nominal_stress", "wall_time"),
+                    "cantilever": ("tip_deflection", "tip_horizontal", "wall_time"),
+                    "plate": ("period", "amplitude", "tip_displacement", "wall_time",
+                              "period_nondim", "amplitude_nondim")}[study]
+        for name in required:
+            assert name in ds, name
+    assert (out / f"{study}_accuracy_vs_cost.png").stat().st_size > 5000
