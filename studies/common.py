@@ -46,11 +46,18 @@ def run_solver(name: str, scene, resolution: int, **options) -> dict:
     wall = time.perf_counter() - t0
     out.setdefault("wall_time", wall)
     out.setdefault("status", "ok")
-    status = out["status"]
-    if not isinstance(status, str):
-        status = "ok" if all(s == "ok" for s in status) else next(s for s in status if s != "ok")
+    out["run_wall_time"] = wall  # the whole call, set-up included
+    status = summary_status(out["status"])
     log.info("run %-10s %-6s resolution=%-4s %7.2f s  %s", scene.name, name, resolution, wall, status)
     return out
+
+
+def summary_status(status) -> str:
+    """One status for a run whose solver reports one per load: 'ok' or the first that is not."""
+    if isinstance(status, str):
+        return status
+    status = [str(s) for s in status]
+    return "ok" if all(s == "ok" for s in status) else next(s for s in status if s != "ok")
 
 
 @dataclass

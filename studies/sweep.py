@@ -28,7 +28,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .common import run_solver
+from .common import run_solver, summary_status
 
 log = logging.getLogger("workbench")
 PACKAGES = ("workbench", "sph", "fem_reference", "studies")
@@ -126,11 +126,9 @@ class Progress:
 
     def update(self, task: Task, out: dict, cached: bool) -> None:
         self.done += 1
-        status = out.get("status")
         log.info("[%d/%d] %s: %s%s, %.2f s", self.done, self.total, task.label(),
-                 status if isinstance(status, str) else "see status",
-                 " (cached)" if cached else "", float(sum(__import__("numpy").atleast_1d(
-                     out.get("wall_time", 0.0)))) if not cached else 0.0)
+                 summary_status(out.get("status", "?")), " (cached)" if cached else "",
+                 0.0 if cached else float(out.get("run_wall_time", float("nan"))))
         if self.tty:
             n = 30
             k = int(n * self.done / max(self.total, 1))

@@ -78,7 +78,8 @@ def cmd_run(args) -> int:
               f"wall {r['wall_time']:.3f} s")
     for g in section["gates"]:
         print("  " + g.line())
-    bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel() if not str(s).startswith("ok")]
+    bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel()
+           if not (str(s).startswith("ok") or str(s) == "not run")]
     if bad:
         print(f"  failed runs: {sorted(set(bad))}")
     return 1 if bad else 0
@@ -137,6 +138,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if (args.verbose or args.command == "verify") else logging.WARNING,
                         format="%(asctime)s %(message)s", datefmt="%H:%M:%S")
+    logging.getLogger("skfem").setLevel(logging.WARNING)
     try:
         return int(args.fn(args) or 0)
     except (UsageError, ParameterError) as err:
