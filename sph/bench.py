@@ -88,12 +88,360 @@ def particle_steps_per_second(solver: str = "csph", n_particles: int = 100_000, 
                 status="ok" if bad < 0 else f"unstable: material point failed at step {bad}")
 
 
-if __name__ == "__main__":  # python -m sph.bench [N] [threads]
+
+# --------------------------------------------------------------------------------------------------
+# ``workbench bench``: the sweep, each measurement in its own subprocess (``python -m sph.bench --one``)
+
+SOLVERS = ("csph", "hpm", "sph")
+DEFAULT_PARTICLES = (10_000, 100_000)
+PARTICLES_RANGE = (100, 10_000_000)
+REPEATS_ENV = "WORKBENCH_BENCH_REPEATS"  # fresh subprocesses per measurement, best kept (default 3)
+TIMEOUT_ENV = "WORKBENCH_BENCH_TIMEOUT"  # seconds per measurement, overriding :func:`_timeout`
+STARTUP_COLD_TIMEOUT = 900.0  # the first (cache-filling) start-up run may compile everything
+
+
+def _current_rss_bytes() -> int:
+    """Resident memory of this process now, bytes."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * resource.getpagesize()
+    except (OSError, IndexError, ValueError):  # pragma: no cover - not Linux
+        return _rss_bytes()
+
+
+def _machine_cores() -> int:
+    try:
+        import os
+
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover
+        import os
+
+        return os.cpu_count() or 1
+
+
+def _timeout(n_particles: int) -> float:
+    """Wall-clock limit of one measurement subprocess, s (setup, warm-up and the timed loop)."""
+    import os
+
+    env = os.environ.get(TIMEOUT_ENV)
+    if env:
+        return float(env)
+    return 120.0 + 3e-3 * n_particles
+
+
+def _run_solver(solver: str, n_particles: int, threads: int, steps: int | None = None) -> dict:
+    """One solver's own bench function, normalised to the keys of :func:`particle_steps_per_second`."""
+    import numba
+
+    if solver == "csph":
+        out = particle_steps_per_second("csph", n_particles, threads, steps=steps)
+    elif solver == "hpm":  # fixed step counts there: enough steps for about 2 s of loop
+        from . import hpm
+
+        out = hpm.bench(n_particles, threads, steps=steps or max(100, int(1e7 / n_particles)))
+    elif solver == "sph":
+        from . import classic
+
+        out = classic.bench(n_particles, threads, steps=steps or max(20, int(2e6 / n_particles)))
+    else:
+        raise ValueError(f"solver: {solver!r} is unknown; allowed: {', '.join(SOLVERS)}")
+    out = dict(out)
+    out.setdefault("status", "ok")
+    try:
+        out.setdefault("numba_threading_layer", numba.threading_layer())
+    except ValueError:  # no parallel region ran
+        out.setdefault("numba_threading_layer", "none")
+    return out
+
+
+def _child_measure(solver: str, n_particles: int, threads: int) -> dict:
+    """Body of ``python -m sph.bench --one``: import, note the baseline memory, run, report."""
+    import numba
+
+    from . import classic, csph, hpm  # noqa: F401  (imports belong to the baseline)
+    from workbench import analytic, scenes  # noqa: F401
+
+    baseline = _current_rss_bytes()
+    out = _run_solver(solver, n_particles, threads)
+    peak = _rss_bytes()
+    n = int(out["n_particles"])
+    out.update(peak_rss_bytes=peak, baseline_rss_bytes=baseline, bytes_per_particle=peak / n,
+               incremental_bytes_per_particle=(peak - baseline) / n, numba_version=numba.__version__)
+    return out
+
+
+def _child_startup(solver: str, n_particles: int) -> dict:
+    """Body of ``python -m sph.bench --startup``: the plate set up and one step taken (after the
+    solver's two warm-up steps, at a small N negligible), then the wall-clock time."""
+    out = _run_solver(solver, n_particles, 1, steps=1)
+    return dict(first_step_done=time.time(), n_particles=out["n_particles"], status=out["status"])
+
+
+def _subprocess(argv: list[str], timeout: float) -> tuple[dict | None, str]:
+    """Run ``python -m sph.bench ARGV``; return (the JSON it printed last, status)."""
+    import json
+    import subprocess
     import sys
 
-    N = int(float(sys.argv[1])) if len(sys.argv) > 1 else 100_000
-    th = [int(t) for t in sys.argv[2:]] or [1]
+    try:
+        proc = subprocess.run([sys.executable, "-m", "sph.bench", *argv], capture_output=True,
+                              text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None, f"error: timed out after {timeout:.0f} s"
+    for line in reversed(proc.stdout.strip().splitlines()):
+        if line.startswith("{"):
+            try:
+                return json.loads(line), "ok"
+            except ValueError:
+                break
+    lines = [ln for ln in proc.stderr.strip().splitlines() if ln.strip()]
+    why = lines[-1].strip() if lines else f"exit status {proc.returncode}"
+    return None, f"error: {why}"[:300]
+
+
+def measure(solver: str, n_particles: int, threads: int, timeout: float | None = None) -> dict:
+    """One (solver, particles, threads) measurement in a fresh subprocess, so that its peak
+    memory is its own and a hang costs at most ``timeout`` seconds. Never raises: a failure is
+    dict(status='error: …')."""
+    t = _timeout(n_particles) if timeout is None else timeout
+    out, status = _subprocess(["--one", solver, str(n_particles), str(threads)], t)
+    if out is None:
+        return {"status": status}
+    return out
+
+
+def startup_time(solver: str, n_particles: int, timeout: float | None = None) -> dict:
+    """Seconds from launching a fresh interpreter to the end of the plate's first step with
+    numba's cache warm: launched twice, the first run fills the cache, the second counts."""
+    t = _timeout(n_particles) if timeout is None else timeout
+    res = {}
+    for attempt, limit in (("cold", max(t, STARTUP_COLD_TIMEOUT)), ("warm", t)):
+        t0 = time.time()
+        out, status = _subprocess(["--startup", solver, str(n_particles)], limit)
+        if out is None:
+            return {"startup_time": math.nan, "status": f"{status} ({attempt} start)"}
+        res[attempt] = out["first_step_done"] - t0
+    return {"startup_time": res["warm"], "cold_startup_time": res["cold"], "status": "ok"}
+
+
+def _validate(args) -> tuple[list[str], list[int], list[int]]:
+    from workbench.cli import UsageError
+
+    cores = _machine_cores()
+    solvers = list(dict.fromkeys(args.solver or SOLVERS))
+    for s in solvers:
+        if s not in SOLVERS:
+            raise UsageError(f"--solver: {s!r} is not benchmarked; allowed: {', '.join(SOLVERS)}")
+    particles = sorted(set(args.particles or DEFAULT_PARTICLES))
+    lo, hi = PARTICLES_RANGE
+    for n in particles:
+        if not lo <= n <= hi:
+            raise UsageError(f"--particles: {n} is out of range; allowed: {lo}..{hi}")
+    if args.threads:
+        threads = sorted(set(args.threads))
+        for t in threads:
+            if not 1 <= t <= cores:
+                raise UsageError(f"--threads: {t} is out of range; allowed: 1..{cores} "
+                                 f"(this machine's cores)")
+    else:
+        threads = sorted({t for t in (1, 2) if t <= cores})
+    return solvers, particles, threads
+
+
+def _load_average() -> str:
+    try:
+        import os
+
+        return " ".join(f"{x:.2f}" for x in os.getloadavg())
+    except OSError:  # pragma: no cover
+        return "unknown"
+
+
+def main(args) -> int:
+    """``workbench bench``: time each (solver, particles, threads) in a subprocess, write
+    ``OUT/bench.nc`` and ``OUT/bench.png``, print a table. Exit status 0 (also when some runs
+    failed: a failure is a recorded result); usage errors raise ``workbench.cli.UsageError``."""
+    import os
+    from pathlib import Path
+
+    import numba
+    import xarray as xr
+
+    from workbench import results
+
+    solvers, particles, threads = _validate(args)
+    repeats = max(1, int(os.environ.get(REPEATS_ENV, "3")))
+    out_dir = Path(args.out or "results")
+    load_before = _load_average()
+    shape = (len(solvers), len(particles), len(threads))
+    psps = np.full(shape, np.nan)
+    loop_time = np.full(shape, np.nan)
+    steps = np.full(shape, np.nan)
+    status = np.full(shape, "", dtype=object)
+    bpp = np.full(shape[:2], np.nan)
+    inc = np.full(shape[:2], np.nan)
+    median = np.full(shape, np.nan)
+    load1 = np.full(shape, np.nan)
+    state = np.full(shape[:2], np.nan)
+    n_actual = np.full(shape[:2], np.nan)
+    startup = np.full(len(solvers), np.nan)
+    cold = np.full(len(solvers), np.nan)
+    startup_status = np.full(len(solvers), "", dtype=object)
+    layers: set[str] = set()
+    n_start = particles[0]
+    for i, s in enumerate(solvers):
+        r = startup_time(s, n_start)  # also fills numba's cache before the timed runs
+        startup[i], cold[i] = r["startup_time"], r.get("cold_startup_time", math.nan)
+        startup_status[i] = r["status"]
+        print(f"bench: {s} start-up {startup[i]:.2f} s (cold {cold[i]:.1f} s) {r['status']}", flush=True)
+        for j, n in enumerate(particles):
+            for k, t in enumerate(threads):
+                load1[i, j, k] = os.getloadavg()[0]
+                runs = [measure(s, n, t) for _ in range(repeats)]
+                good = [x for x in runs if x.get("status") == "ok"]
+                r = max(good, key=lambda x: x["particle_steps_per_second"]) if good else runs[0]
+                if good:
+                    median[i, j, k] = float(np.median([x["particle_steps_per_second"] for x in good]))
+                st = str(r.get("status", "error: no status"))
+                status[i, j, k] = st
+                if "n_particles" in r:
+                    n_actual[i, j] = r["n_particles"]
+                if r.get("numba_threading_layer"):
+                    layers.add(str(r["numba_threading_layer"]))
+                if st == "ok":
+                    psps[i, j, k] = r["particle_steps_per_second"]
+                    loop_time[i, j, k] = r["loop_time"]
+                    steps[i, j, k] = r["steps"]
+                    # the fewest threads' run: the least thread-stack overhead in the peak
+                    if np.isnan(bpp[i, j]):
+                        bpp[i, j] = r["bytes_per_particle"]
+                        inc[i, j] = r["incremental_bytes_per_particle"]
+                        state[i, j] = r.get("state_bytes_per_particle", math.nan)
+                print(f"bench: {s} N={n} threads={t}: {psps[i, j, k]:.3g} particle-steps/s  {st}",
+                      flush=True)
+    try:
+        layer = numba.threading_layer()
+    except ValueError:
+        layer = ", ".join(sorted(layers)) or "unknown"
+    extra = {"numba_version": numba.__version__, "numba_threading_layer": layer,
+             "machine_cores": _machine_cores(), "repeats": repeats,
+             "particle_steps_per_second_definition": "best of `repeats` fresh subprocesses (a "
+                                                     "shared machine only ever slows a run down)", "startup_particles": n_start,
+             "load_average_before": load_before, "load_average_after": _load_average(),
+             "timeout_per_measurement_s": ", ".join(f"{n}: {_timeout(n):.0f}" for n in particles),
+             "startup_definition": "wall time from launching a fresh interpreter to the end of the "
+                                   "plate's first step (after the solver's warm-up steps) at "
+                                   "startup_particles, numba cache warm (second of two launches)",
+             "bytes_per_particle_definition": "peak RSS (ru_maxrss) of a fresh subprocess running the "
+                                              "fewest-threads measurement, over its particle count"}
+    from workbench.scenes import Plate
+
+    dims3, dims2 = ("solver", "particles", "threads"), ("solver", "particles")
+    ds = xr.Dataset(
+        {"particle_steps_per_second": (dims3, psps, {"units": "1/s", "long_name":
+                                                     "particles x steps / wall time of the time loop"}),
+         "particle_steps_per_second_median": (dims3, median, {"units": "1/s", "long_name":
+                                                               "median over the repeats"}),
+         "load_average": (dims3, load1, {"units": "-", "long_name":
+                                         "1-minute load average before the measurement"}),
+         "loop_time": (dims3, loop_time, {"units": "s"}),
+         "steps": (dims3, steps, {"units": "-"}),
+         "status": (dims3, status.astype(str), {"units": "-"}),
+         "bytes_per_particle": (dims2, bpp, {"units": "B", "long_name":
+                                             "peak resident memory of the run / particles"}),
+         "incremental_bytes_per_particle": (dims2, inc, {"units": "B", "long_name":
+                                                         "(peak RSS - RSS after imports) / particles"}),
+         "state_bytes_per_particle": (dims2, state, {"units": "B", "long_name":
+                                                     "arrays the time loop keeps / particles "
+                                                     "(where the solver reports it)"}),
+         "n_particles_actual": (dims2, n_actual, {"units": "-"}),
+         "startup_time": (("solver",), startup, {"units": "s"}),
+         "cold_startup_time": (("solver",), cold, {"units": "s", "long_name":
+                                                   "first launch (cache filled or reused)"}),
+         "startup_status": (("solver",), startup_status.astype(str), {"units": "-"})},
+        coords={"solver": ("solver", np.array(solvers)),
+                "particles": ("particles", np.array(particles), {"units": "-", "long_name":
+                                                                 "requested particles"}),
+                "threads": ("threads", np.array(threads), {"units": "-"})},
+        attrs=results.provenance("bench", Plate(), extra))
+    path = results.write(ds, out_dir / "bench.nc")
+    png = plot(ds, out_dir / "bench.png")
+    _print_table(ds)
+    print(f"bench: {path}  {png}")
+    return 0
+
+
+def _print_table(ds) -> None:
+    print(f"{'solver':<6} {'N req':>9} {'N':>9} {'thr':>3} {'particle-steps/s':>17} "
+          f"{'B/particle':>11} {'startup s':>9}  status")
+    for s in ds.solver.values:
+        for n in ds.particles.values:
+            for t in ds.threads.values:
+                c = dict(solver=s, particles=n, threads=t)
+                na = float(ds.n_particles_actual.sel(solver=s, particles=n))
+                print(f"{s:<6} {int(n):>9} {('-' if math.isnan(na) else int(na)):>9} {int(t):>3} "
+                      f"{float(ds.particle_steps_per_second.sel(c)):>17.3e} "
+                      f"{float(ds.bytes_per_particle.sel(solver=s, particles=n)):>11.0f} "
+                      f"{float(ds.startup_time.sel(solver=s)):>9.2f}  {str(ds.status.sel(c).values)}")
+
+
+def plot(ds, path):
+    """Particle-steps per second against particles, log-log, one line per solver x threads."""
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colours = {"csph": "tab:red", "hpm": "tab:green", "sph": "tab:purple"}
+    styles = ["-", "--", ":", "-."]
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for s in ds.solver.values:
+        for k, t in enumerate(ds.threads.values):
+            y = ds.particle_steps_per_second.sel(solver=s, threads=t).values
+            x = ds.n_particles_actual.sel(solver=s).values
+            x = np.where(np.isnan(x), ds.particles.values, x)
+            ax.plot(x, y, marker="o", ls=styles[k % len(styles)], color=colours.get(str(s)),
+                    label=f"{s}, {int(t)} thread{'s' if t > 1 else ''}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("particles N [-]")
+    ax.set_ylabel("throughput [particle-steps / s]")
+    ax.set_title(f"plate time loop, {ds.attrs.get('cpu_model', '')}"[:70], fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _cli(argv: list[str]) -> int:
+    """``python -m sph.bench --one SOLVER N THREADS`` / ``--startup SOLVER N`` (one JSON line), or
+    the legacy ``python -m sph.bench [N] [threads…]`` (csph, SVK and J2)."""
+    import json
+
+    if argv and argv[0] == "--one":
+        solver, n, t = argv[1], int(float(argv[2])), int(argv[3])
+        print(json.dumps(_child_measure(solver, n, t), default=str), flush=True)
+        return 0
+    if argv and argv[0] == "--startup":
+        print(json.dumps(_child_startup(argv[1], int(float(argv[2]))), default=str), flush=True)
+        return 0
+    N = int(float(argv[0])) if argv else 100_000
+    th = [int(t) for t in argv[1:]] or [1]
     for t in th:
         for law in ("svk", "j2"):
             r = particle_steps_per_second("csph", N, t, law=law)
             print({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
+    return 0
+
+
+if __name__ == "__main__":  # python -m sph.bench --one … | --startup … | [N] [threads…]
+    import sys
+
+    sys.exit(_cli(sys.argv[1:]))

@@ -38,9 +38,10 @@ from numba import njit, prange
 from workbench.materials.kernels import material_point, svk_point
 
 from . import lattice
+from .diagnostics import period_amplitude, probe_displacement
 from .integrate import cfl_time_step, kick_drift_row, kick_row
-from .kernels import JIT, SUPPORT, dw_dr, kernel_code, w
-from .neighbours import neighbour_list
+from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, kernel_code, w
+from .neighbours import drop_cross_body, neighbour_list
 
 DEFAULT_CORRECTION = "quadratic"
 """Gradient correction used by :func:`solve` unless ``correction=`` is given. The paper's
@@ -57,9 +58,6 @@ machine two threads made a 400-particle plate 50× slower)."""
 FASTMATH = {"contract", "arcp"}
 """LLVM flags of the time loop: fused multiply–add and reciprocal multiplication only (no
 reassociation, so sums keep their order and the conservation tests hold to round-off)."""
-
-N_CHUNKS = 64
-"""Work items of the chunked parallel loops (each allocates its 3×3 scratch once)."""
 
 
 # ================================================================================================
@@ -257,9 +255,12 @@ class Discretisation:
 
 
 def discretise(X, V, rho: float, dx: float, h_ratio: float = 1.3,
-               kernel: str = "cubic_spline", correction: str = "linear") -> Discretisation:
+               kernel: str = "cubic_spline", correction: str = "linear",
+               body=None) -> Discretisation:
     """Neighbours, correction and corrected gradients of the particles X (N, d) with volumes V,
-    spacing dx and smoothing length h = h_ratio·dx (kernel support 2h).
+    spacing dx and smoothing length h = h_ratio·dx (kernel support 2h). ``body`` (N,) int,
+    optional: particles of different bodies are not neighbours (separate bodies meet only
+    through :mod:`sph.contact`).
 
     ``correction``: ``"linear"`` — Bonet–Lok, eq. 31 and 34 (the paper's CSPH); ``"quadratic"`` —
     :func:`quadratic_gradients` (exact for quadratic fields; the same force and conservation)."""
@@ -272,6 +273,8 @@ def discretise(X, V, rho: float, dx: float, h_ratio: float = 1.3,
     kind = kernel_code(kernel)
     h = h_ratio * dx
     indptr, indices = neighbour_list(X, SUPPORT * h)
+    if body is not None:
+        indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
     L, ok = correction_matrices(X, V, indptr, indices, h, kind)
     if correction == "linear":
         G = corrected_gradients(X, V, indptr, indices, h, kind, L)
@@ -886,7 +889,8 @@ class Dynamics:
 
 def solve(scene, resolution: int, **options) -> dict:
     """Run CSPH on a scene (``workbench.scenes``): ``SSCurve`` (static Newton, J2, 3-D block),
-    ``Cantilever`` (static Newton with load steps, DR fallback), ``Plate`` (explicit dynamics).
+    ``Cantilever`` (static Newton with load steps, DR fallback), ``Plate`` (explicit dynamics),
+    and the stability scenes ``Ring``, ``Slab``, ``Rings`` (explicit dynamics, :mod:`sph.stability`).
     ``resolution``: cells per block edge (SS curve) or particles across H (2-D scenes).
     Options: ``h_ratio`` (1.3), ``kernel`` ('cubic_spline'), ``lattice`` ('cell'/'node'), and the
     scene-specific ones of :func:`solve_ss_curve`, :func:`solve_cantilever`, :func:`solve_plate`."""
@@ -900,8 +904,12 @@ def solve(scene, resolution: int, **options) -> dict:
         return solve_cantilever(scene, int(resolution), **options)
     if isinstance(scene, Plate):
         return solve_plate(scene, int(resolution), **options)
+    from . import stability
+
+    if stability.is_stability_scene(scene):
+        return stability.solve("csph", scene, resolution, **options)
     raise ValueError(f"scene: {type(scene).__name__} is not supported by csph "
-                     f"(SSCurve, Cantilever, Plate)")
+                     f"(SSCurve, Cantilever, Plate, Ring, Slab, Rings)")
 
 
 def solve_ss_curve(scene, resolution: int = 2, h_ratio: float = 1.3,
@@ -981,12 +989,6 @@ def solve_ss_curve(scene, resolution: int = 2, h_ratio: float = 1.3,
     return out
 
 
-def _tip(ps, x, X):
-    idx, w = ps.probes["tip_mid"]
-    u = (x[idx] - X[idx]) * w[:, None]
-    return u.sum(axis=0)
-
-
 def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: str = "cubic_spline",
                      lattice_mode: str = "node", method: str = "newton", tol: float = 1e-8,
                      max_cuts: int = 6, hourglass: float = 0.0, correction: str = DEFAULT_CORRECTION) -> dict:
@@ -1058,7 +1060,7 @@ def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: 
         res["wall_time"][i] = time.perf_counter() - t0
         if failed:
             continue
-        u = _tip(ps, x, disc.X)
+        u = probe_displacement(ps, "tip_mid", x)
         res["tip_deflection"][i] = -u[1]
         res["tip_horizontal"][i] = -u[0]
     return res
@@ -1132,7 +1134,7 @@ def solve_plate(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: str =
             break
     tip = tip[: done + 1]
     t_hist = np.arange(done + 1) * dt
-    period, amplitude = _period_amplitude(t_hist, tip)
+    period, amplitude = period_amplitude(t_hist, tip)
     if status != "ok":
         period = amplitude = math.nan
     return dict(period=period, amplitude=amplitude, time=t_hist, tip_displacement=tip,
@@ -1164,20 +1166,3 @@ def modal_period(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: str 
     M = sp.diags(np.repeat(disc.m, 2)[free]).tocsc()
     w2 = spla.eigsh(Kf, k=n_modes, M=M, sigma=0, which="LM", return_eigenvectors=False)
     return np.sort(2 * np.pi / np.sqrt(np.abs(w2)))[::-1]
-
-
-def _period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
-    """Period from the zero crossings of u(t) after t = 0 (linear interpolation between samples),
-    twice the mean spacing of consecutive crossings; amplitude max |u|. NaN if fewer than two."""
-    s = np.sign(u[1:])
-    i = np.nonzero(s[1:] * s[:-1] < 0)[0] + 1  # crossing between samples i and i+1 of u[1:]
-    tc = []
-    for j in i:
-        u0, u1 = u[j], u[j + 1]
-        t0_, t1_ = t[j], t[j + 1]
-        tc.append(t0_ - u0 * (t1_ - t0_) / (u1 - u0))
-    amplitude = float(np.max(np.abs(u))) if u.size else math.nan
-    if len(tc) < 2:
-        return math.nan, amplitude
-    tc = np.asarray(tc)
-    return float(2.0 * np.mean(np.diff(tc))), amplitude

@@ -9,12 +9,14 @@ the scenes. For an elastoplastic law ψ is not defined by this path and the rout
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, prange
 
 from workbench.materials.kernels import material_point
 
-from .kernels import JIT
+from .kernels import JIT, N_CHUNKS
 
 N_GAUSS = 6
 _GX, _GW = np.polynomial.legendre.leggauss(N_GAUSS)
@@ -56,7 +58,7 @@ def strain_energy(F: np.ndarray, V: np.ndarray, prm: np.ndarray, per_particle: b
     F: (N, 3, 3) deformation gradients; V: (N,) reference volumes; prm: ``Material.params()``.
     """
     e = _strain_energy(np.ascontiguousarray(F), np.ascontiguousarray(V, dtype=np.float64), prm,
-                       GAUSS_S, GAUSS_W, 64)
+                       GAUSS_S, GAUSS_W, N_CHUNKS)
     return e if per_particle else float(e.sum())
 
 
@@ -87,3 +89,47 @@ def total_torque(x: np.ndarray, f: np.ndarray):
     if x.shape[1] == 2:
         return float(np.sum(x[:, 0] * f[:, 1] - x[:, 1] * f[:, 0]))
     return np.cross(x, f).sum(axis=0)
+
+
+# ------------------------------------------------------------------------------------------------
+# Observables of the dynamic drivers (shared by csph, hpm, classic and the stability scenes)
+# ------------------------------------------------------------------------------------------------
+
+MIN_CROSSINGS = 2
+"""Zero crossings a history needs for a period (two crossings: half a period)."""
+
+
+def period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
+    """Period (s) from the zero crossings of u(t) after t = 0 and amplitude max |u| (m).
+
+    The crossing times are interpolated linearly between samples; the period is twice the
+    least-squares slope of crossing time against crossing index (half a period per crossing).
+    NaN period if there are fewer than ``MIN_CROSSINGS`` crossings."""
+    t = np.asarray(t, float)
+    u = np.asarray(u, float)
+    amp = float(np.nanmax(np.abs(u))) if len(u) else math.nan
+    t1, y1 = t[1:], u[1:]
+    i = np.flatnonzero(np.sign(y1[:-1]) * np.sign(y1[1:]) < 0)
+    tc = t1[i] - y1[i] * (t1[i + 1] - t1[i]) / (y1[i + 1] - y1[i])
+    if len(tc) < MIN_CROSSINGS:
+        return math.nan, amp
+    return float(2 * np.polyfit(np.arange(len(tc)), tc, 1)[0]), amp
+
+
+def probe_displacement(ps, name: str, x: np.ndarray) -> np.ndarray:
+    """Displacement (d,) m at the probe ``name`` of a :class:`sph.lattice.ParticleSet`: the
+    weighted sum Σ w_q (x_q − X_q) over the probe's particles."""
+    idx, wts = ps.probes[name]
+    return np.asarray(wts) @ (x[idx] - ps.X[idx])
+
+
+def energy_change(e0: float, e: float, scale: float, tol: float) -> tuple[bool, float]:
+    """The one-sided energy criterion: (grew, change) with change = (e − e0)/scale. ``grew`` is
+    True when the energy rose by more than ``tol``·scale or is not finite (a blow-up); a loss of
+    energy (dissipation by artificial viscosity, damping) never counts as instability."""
+    if not math.isfinite(e):
+        return True, math.inf
+    if not scale > 0:  # nothing to compare with (a body at rest and unloaded)
+        return False, math.nan
+    change = (e - e0) / scale
+    return change > tol, change

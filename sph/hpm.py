@@ -52,13 +52,11 @@ from numba import njit, prange
 from workbench.materials.kernels import material_point
 
 from . import lattice
-from .diagnostics import energy_change, period_amplitude, probe_displacement, strain_energy
-from .integrate import cfl_time_step, check_dt_factor, kick_drift_row, kick_row
-from .kernels import JIT
+from .diagnostics import probe_displacement, strain_energy
+from .integrate import cfl_time_step, check_dt_factor, kick_drift_row, kick_row, run_monitored
+from .kernels import JIT, N_CHUNKS
 from .neighbours import drop_cross_body, neighbour_list
 
-N_CHUNKS = 64
-"""Work items of the chunked parallel loops (each allocates its 3×3 scratch once)."""
 RE_RATIO = 2.1
 """Default influence radius r_e over the particle spacing (eq. 6)."""
 
@@ -442,9 +440,11 @@ def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
     Returns dict(period (s, zero crossings of the tip history), amplitude (m, max |tip
     displacement|), time, tip_displacement (m, +Y, probe ``tip_mid``), kinetic_energy,
     strain_energy (J per unit thickness, incl. the stabilisation potential), energy_drift
-    (relative change of the total energy), dt, steps, wall_time (time loop, s), n_particles,
-    status). A blow-up (material failure, NaN, total energy grown by more than ``energy_growth``
-    relative) ends the run with status 'unstable: <reason> at t=…'.
+    (relative change of the total energy), dissipated (fraction of the energy lost, ≥ 0), note,
+    dt, steps, wall_time (time loop, s), n_particles, status). A blow-up (material failure, NaN,
+    total energy *grown* by more than ``energy_growth`` relative) ends the run with status
+    'unstable: <reason> at t=…'; a loss of energy is not instability (see
+    :func:`sph.integrate.run_monitored`).
     """
     from workbench import analytic
 
@@ -465,44 +465,15 @@ def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
 
 
 def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, a_ext=None):
-    n_steps = int(math.ceil(t_end / dt))
-    per = max(1, n_steps // n_out)
-    times, tip, kes, pes = [0.0], [0.0], [], []
-    ke, pe = energies(model, st)
-    kes.append(ke)
-    pes.append(pe)
-    e0 = ke + pe
-    status = "ok"
-    wall = 0.0
-    done_total = 0
-    while done_total < n_steps:
-        k = min(per, n_steps - done_total)
-        t0 = time.perf_counter()
-        done = advance(model, st, dt, k, fixed=fixed, a_ext=a_ext, scheme=scheme)
-        wall += time.perf_counter() - t0
-        done_total += done
-        if done < k or not np.isfinite(st.x).all():
-            reason = "material point failed (J <= 0 or no convergence)" if st.status.any() else "non-finite state"
-            status = f"unstable: {reason} at t={st.t:.4g} s"
-            break
-        ke, pe = energies(model, st)
-        times.append(st.t)
-        tip.append(probe_displacement(ps, "tip_mid", st.x)[1])
-        kes.append(ke)
-        pes.append(pe)
-        if e0 > 0 and abs(ke + pe - e0) > energy_growth * e0:
-            status = f"unstable: total energy changed by {(ke + pe - e0) / e0:+.3g} at t={st.t:.4g} s"
-            break
-    t = np.asarray(times)
-    u = np.asarray(tip)
-    T, A = period_amplitude(t, u) if status == "ok" else (float("nan"), float("nan"))
-    ke_a, pe_a = np.asarray(kes), np.asarray(pes)
-    e = ke_a + pe_a
-    return dict(period=T, amplitude=A, time=t, tip_displacement=u, kinetic_energy=ke_a,
-                strain_energy=pe_a, energy_drift=float((e[-1] - e[0]) / e[0]) if e[0] else float("nan"),
-                dt=dt, steps=int(st.steps), wall_time=wall, n_particles=int(model.n), status=status,
-                particle_steps_per_second=model.n * st.steps / wall if wall > 0 else float("nan"),
-                n_singular=model.n_singular)
+    out = run_monitored(
+        lambda k: advance(model, st, dt, k, fixed=fixed, a_ext=a_ext, scheme=scheme),
+        lambda: energies(model, st), lambda: probe_displacement(ps, "tip_mid", st.x)[1],
+        lambda: st.status.any(), st, int(math.ceil(t_end / dt)), n_out, energy_growth)
+    wall = out["wall_time"]
+    out.update(dt=dt, steps=int(st.steps), n_particles=int(model.n),
+               particle_steps_per_second=model.n * st.steps / wall if wall > 0 else float("nan"),
+               n_singular=model.n_singular)
+    return out
 
 
 def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_ratio: float = RE_RATIO,

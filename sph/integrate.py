@@ -26,12 +26,18 @@ from numba import njit, prange
 from .kernels import JIT
 
 
-def cfl_time_step(dx: float, wave_speed: float, factor: float) -> float:
-    """dt = factor · Δx / c, s, with c the fastest elastic wave speed (m/s) and Δx the particle
-    spacing (m). ``factor`` must lie in (0, 10]; anything else is a ``ValueError`` naming it."""
+def check_dt_factor(factor) -> None:
+    """``factor`` (time step over the CFL estimate) must lie in (0, 10]; anything else is a
+    ``ValueError`` naming it."""
     if not (isinstance(factor, (int, float)) and math.isfinite(factor) and 0 < factor <= 10):
         raise ValueError(f"dt_factor: {factor!r} is not allowed; the time step over the CFL "
                          f"estimate must lie in (0, 10]")
+
+
+def cfl_time_step(dx: float, wave_speed: float, factor: float) -> float:
+    """dt = factor · Δx / c, s, with c the fastest elastic wave speed (m/s) and Δx the particle
+    spacing (m). ``factor`` as :func:`check_dt_factor`."""
+    check_dt_factor(factor)
     if not (dx > 0 and wave_speed > 0):
         raise ValueError(f"dx, wave_speed: must be > 0 (got {dx}, {wave_speed})")
     return factor * dx / wave_speed
@@ -89,3 +95,60 @@ def velocity_verlet(x, v, acc, accel_fn, dt: float, n_steps: int, fixed=None, v_
         if callback is not None and callback(s + 1, x, v, acc):
             return s + 1
     return n_steps
+
+
+def run_monitored(step, energies, observe, failed, state, n_steps: int, n_out: int,
+                  energy_growth: float) -> dict:
+    """The monitored time loop of the plate drivers (hpm, classic SPH): ``n_steps`` steps in about
+    ``n_out`` chunks; after each chunk the energies and the observed quantity are recorded.
+
+    ``step(k) -> steps done``; ``energies() -> (kinetic, stored)``; ``observe() -> float`` (the tip
+    displacement); ``failed() -> bool`` (a material point failed); ``state`` has ``x`` and ``t``.
+    Unstable (status 'unstable: <reason> at t=…', the run ends) on a short step, a non-finite state,
+    or total energy *grown* by more than ``energy_growth`` of the initial energy
+    (:func:`sph.diagnostics.energy_change`, one-sided). A loss of energy is recorded as
+    ``dissipated`` (fraction of the initial energy lost at the end, ≥ 0) with a ``note`` when it
+    exceeds ``energy_growth``; the status stays 'ok'. ``period`` and ``amplitude`` come from the
+    observed history by :func:`sph.diagnostics.period_amplitude` (NaN for an unstable run)."""
+    import time
+
+    from .diagnostics import energy_change, period_amplitude
+
+    per = max(1, n_steps // n_out)
+    times, obs = [0.0], [0.0]
+    ke, pe = energies()
+    kes, pes = [ke], [pe]
+    e0 = ke + pe
+    status = "ok"
+    wall = 0.0
+    done_total = 0
+    while done_total < n_steps:
+        k = min(per, n_steps - done_total)
+        t0 = time.perf_counter()
+        done = step(k)
+        wall += time.perf_counter() - t0
+        done_total += done
+        if done < k or not np.isfinite(state.x).all():
+            reason = "material point failed (J <= 0 or no convergence)" if failed() else "non-finite state"
+            status = f"unstable: {reason} at t={state.t:.4g} s"
+            break
+        ke, pe = energies()
+        times.append(state.t)
+        obs.append(observe())
+        kes.append(ke)
+        pes.append(pe)
+        grew, change = energy_change(e0, ke + pe, e0, energy_growth)
+        if grew:
+            status = f"unstable: total energy grew by {change:+.3g} at t={state.t:.4g} s"
+            break
+    t, u = np.asarray(times), np.asarray(obs)
+    T, A = period_amplitude(t, u) if status == "ok" else (math.nan, math.nan)
+    ke_a, pe_a = np.asarray(kes), np.asarray(pes)
+    e = ke_a + pe_a
+    drift = float((e[-1] - e[0]) / e[0]) if e[0] else math.nan
+    dissipated = max(0.0, -drift) if math.isfinite(drift) else math.nan
+    note = (f"dissipated {100 * dissipated:.3g} % of the initial energy"
+            if status == "ok" and dissipated > energy_growth else "")
+    return dict(period=T, amplitude=A, time=t, tip_displacement=u, kinetic_energy=ke_a,
+                strain_energy=pe_a, energy_drift=drift, dissipated=dissipated, note=note,
+                status=status, wall_time=wall)

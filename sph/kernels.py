@@ -24,6 +24,8 @@ from numba import njit
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 """numba options shared by the whole particle core (one place, as style.md asks)."""
+N_CHUNKS = 64
+"""Work items of the chunked parallel loops (each allocates its 3×3 scratch once)."""
 
 KERNELS = {"cubic_spline": 0, "wendland_c2": 1}
 SUPPORT = 2.0

@@ -145,3 +145,14 @@ def brute_force(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
     np.cumsum(counts, out=indptr[1:])
     indices = np.nonzero(mask)[1].astype(np.int32)
     return indptr, indices
+
+
+def drop_cross_body(indptr: np.ndarray, indices: np.ndarray, body: np.ndarray):
+    """The CSR list without the pairs whose particles belong to different bodies (``body`` (N,)
+    int labels): separate bodies never interact through the kernel, only through contact."""
+    N = len(indptr) - 1
+    rows = np.repeat(np.arange(N), np.diff(indptr))
+    keep = body[rows] == body[indices]
+    new_ptr = np.zeros_like(indptr)
+    np.cumsum(np.bincount(rows[keep], minlength=N), out=new_ptr[1:])
+    return new_ptr, np.ascontiguousarray(indices[keep])

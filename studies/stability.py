@@ -2,20 +2,27 @@
 
 For every particle method and scene (``ring``, ``slab``, ``rings``, ``plate``) and every time-step
 factor of the ladder, one run is classified as stable or not by the criteria of
-:mod:`sph.stability` (non-finite state or failed material point; energy balance off by more than
-50 %; particle disorder η₉₅ > 0.15), and its energy drift is recorded. ``max_stable_dt_factor`` is
+:mod:`sph.stability` (non-finite state or failed material point; energy balance grown by more
+than 50 % — one-sided: a loss of energy, e.g. to artificial viscosity, is recorded as ``dissipated``
+with a ``note`` and the status stays 'ok'; particle disorder η₉₅ > 0.15), and its energy drift is
+recorded. The runs are :class:`studies.sweep.Task` s executed by :func:`studies.sweep.run_tasks`
+(serial, local or remote dask; finished runs cached). ``max_stable_dt_factor`` is
 the largest factor below which every run of the ladder was stable. The plate uses the methods' own
-plate drivers (criteria: non-finite state, total energy changed by more than 50 %).
+plate drivers (criteria: non-finite state, total energy grown by more than 50 %; the
+period of a dissipating classic-SPH plate is still read from its tip history).
 
 Method options of this study (recorded in the attributes): ``hpm`` runs the stability scenes with
 the zero-energy-mode stabilisation α = 1 (without it the ring's point loads excite the zero-energy
 modes, see tests/test_stability.py) and the plate without it; ``sph`` uses the Eulerian cubic
 spline, h = 1.3Δx, Monaghan viscosity α = β = 1, no artificial stress, and the hyperelastic stress
 path (F from Ḟ = L F, stress from the shared library) in the stability scenes, the hypoelastic
-Jaumann path on the plate. ``csph`` is asked through its own ``solve``; a scene it has no driver
-for is recorded as an error status, not a crash.
+Jaumann path on the plate; ``csph`` its defaults (quadratic gradient correction; h = 1.3Δx in
+ring/slab/rings, 1.1Δx on the plate; no hourglass control). A run that fails is recorded as an
+error status, not a crash.
 """
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import xarray as xr
@@ -24,7 +31,8 @@ from workbench import results
 from workbench.scenes import Plate
 from workbench.stability_scenes import Ring, Rings, Slab
 
-from .common import Gate, run_solver
+from .common import Gate
+from .sweep import Task, run_tasks
 
 NAME = "stability"
 SCENE = Ring
@@ -43,47 +51,53 @@ OPTIONS = {"hpm": {"stabilisation": 1.0}, "sph": {}, "csph": {}}
 PLATE_OPTIONS = {"hpm": {}, "sph": {}, "csph": {}}
 
 
-def _one(solver, name, dt_factor, quick):
-    import dataclasses
-
+def _task(solver, name, dt_factor, quick) -> Task:
+    """One run of the sweep: the scene of ``SETUP[name]`` with ``dt_factor`` (and the end time of
+    the study) set on the scene itself, so that the task's cache key carries them."""
     scene, res, qres, (t_full, t_quick) = SETUP[name]
     t_end = t_quick if quick else t_full
     r = qres if quick else res
     if name == "plate":
         sc = dataclasses.replace(scene, dt_factor=dt_factor,
                                  periods=t_end if t_end is not None else scene.periods)
-        return run_solver(solver, sc, r, **PLATE_OPTIONS[solver])
+        return Task.make(solver, sc, r, **PLATE_OPTIONS[solver])
     fields = {"dt_factor": dt_factor}
     if t_end is not None:
         fields["t_end"] = t_end
-    sc = dataclasses.replace(scene, **fields)
-    return run_solver(solver, sc, r, **OPTIONS[solver])
+    return Task.make(solver, dataclasses.replace(scene, **fields), r, **OPTIONS[solver])
 
 
-def run(scene=None, solvers=None, resolutions=None, quick: bool = False) -> xr.Dataset:
-    """Sweep (solver × scene × dt_factor). ``scene`` and ``resolutions`` are accepted for the
-    common study signature; the scenes and resolutions of this study are fixed in ``SETUP``."""
+def run(scene=None, solvers=None, resolutions=None, quick: bool = False,
+        scheduler: str | None = None) -> xr.Dataset:
+    """Sweep (solver × scene × dt_factor) as a list of :class:`studies.sweep.Task` run by
+    :func:`studies.sweep.run_tasks` (serially, on dask, cached runs reused). ``scene`` and
+    ``resolutions`` are accepted for the common study signature; the scenes and resolutions of
+    this study are fixed in ``SETUP``."""
     solvers = list(solvers or SOLVERS)
     for s in solvers:
         if s not in SOLVERS:
             raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     factors = list(QUICK_DT_FACTORS if quick else DT_FACTORS)
     shp = (len(solvers), len(SCENES), len(factors))
+    index = list(np.ndindex(*shp))
+    tasks = [_task(solvers[i], SCENES[j], factors[k], quick) for i, j, k in index]
+    outs = run_tasks(tasks, scheduler, NAME)
     stable = np.zeros(shp, bool)
     drift = np.full(shp, np.nan)
+    dissipated = np.full(shp, np.nan)
     disorder = np.full(shp, np.nan)
     wall = np.full(shp, np.nan)
     status = np.full(shp, "not run", dtype=object)
-    for i, s in enumerate(solvers):
-        for j, name in enumerate(SCENES):
-            for k, f in enumerate(factors):
-                out = _one(s, name, f, quick)
-                st = out["status"] if isinstance(out["status"], str) else str(out["status"])
-                status[i, j, k] = st
-                stable[i, j, k] = bool(out.get("stable", st == "ok")) and st == "ok"
-                drift[i, j, k] = out.get("energy_drift", np.nan)
-                disorder[i, j, k] = out.get("disorder", np.nan)
-                wall[i, j, k] = float(np.sum(out.get("wall_time", np.nan)))
+    note = np.full(shp, "", dtype=object)
+    for (i, j, k), out in zip(index, outs):
+        st = out["status"] if isinstance(out["status"], str) else str(out["status"])
+        status[i, j, k] = st
+        stable[i, j, k] = bool(out.get("stable", st == "ok")) and st == "ok"
+        drift[i, j, k] = out.get("energy_drift", np.nan)
+        dissipated[i, j, k] = out.get("dissipated", np.nan)
+        note[i, j, k] = out.get("note", "")
+        disorder[i, j, k] = out.get("disorder", np.nan)
+        wall[i, j, k] = float(np.sum(out.get("wall_time", np.nan)))
     max_stable = np.full(shp[:2], np.nan)
     for i in range(shp[0]):
         for j in range(shp[1]):
@@ -97,6 +111,10 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False) -> xr.D
                                      "largest dt factor of the ladder with every smaller one stable (0: none)"}),
             "energy_drift": (("solver", "scene", "dt_factor"), drift, {"units": "-", "long_name":
                              "relative change of the total energy (balance incl. dead-load work) over the run; NaN for the kinematically driven slab"}),
+            "dissipated": (("solver", "scene", "dt_factor"), dissipated, {"units": "-", "long_name":
+                           "fraction of the energy lost over the run (>= 0; dissipation, not instability)"}),
+            "note": (("solver", "scene", "dt_factor"), note.astype(str), {"units": "-", "long_name":
+                     "remark beside an 'ok' status (strong dissipation)"}),
             "disorder": (("solver", "scene", "dt_factor"), disorder, {"units": "-", "long_name":
                          "particle disorder eta95 at the end (sph.stability)"}),
             "wall_time": (("solver", "scene", "dt_factor"), wall, {"units": "s"}),
@@ -108,10 +126,14 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False) -> xr.D
     )
     ds.attrs.update(results.provenance(NAME, None))
     ds.attrs.update(
-        criterion="unstable if: non-finite state or failed material point; |energy balance change| > "
-                  "0.5 of the largest energy seen; particle disorder eta95 > 0.15 (sph.stability)",
+        criterion="unstable if: non-finite state or failed material point; energy balance GROWN by more "
+                  "than 0.5 of the largest energy seen, or non-finite (one-sided: a loss of energy is "
+                  "dissipation, recorded in 'dissipated' with a note, status ok); particle disorder "
+                  "eta95 > 0.15 (sph.stability). Plate: non-finite state or failed material point; "
+                  "total energy grown by more than 0.5 of the initial energy (hpm, sph), 100-fold (csph)",
         plane="strain", quick=int(quick),
         options_hpm="stabilisation=1 in ring/slab/rings, 0 on the plate; r_e = 2.1 dx",
+        options_csph="quadratic correction, cubic spline, h = 1.3 dx in ring/slab/rings, 1.1 dx on the plate",
         options_sph="cubic spline h = 1.3 dx, alpha = beta = 1, no artificial stress; hyperelastic "
                     "stress path in ring/slab/rings, hypoelastic Jaumann on the plate",
         resolutions=str({k: (v[2] if quick else v[1]) for k, v in SETUP.items()}),

@@ -1,0 +1,76 @@
+"""``workbench bench`` (contract: ``bench.nc``): schema, units and sane values of a small sweep, and
+bad input as one line with exit status 2. Speed is reported, never gated here."""
+import math
+
+import numpy as np
+import pytest
+
+from workbench import cli, results
+
+
+@pytest.fixture(scope="module")
+def bench_ds(tmp_path_factory):
+    from sph import bench
+
+    out = tmp_path_factory.mktemp("bench")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(bench.REPEATS_ENV, "1")  # one run per cell is enough for the schema
+        rc = cli.main(["bench", "--particles", "2000", "--threads", "1", "--solver", "csph",
+                       "--solver", "hpm", "--out", str(out)])
+    assert rc == 0
+    assert (out / "bench.png").stat().st_size > 0
+    return results.read(out / "bench.nc")
+
+
+def test_schema_and_units(bench_ds):
+    ds = bench_ds
+    assert list(ds.solver.values) == ["csph", "hpm"]
+    assert list(ds.particles.values) == [2000] and list(ds.threads.values) == [1]
+    expect = {"particle_steps_per_second": (("solver", "particles", "threads"), "1/s"),
+              "status": (("solver", "particles", "threads"), "-"),
+              "bytes_per_particle": (("solver", "particles"), "B"),
+              "n_particles_actual": (("solver", "particles"), "-"),
+              "startup_time": (("solver",), "s")}
+    for name, (dims, units) in expect.items():
+        assert ds[name].dims == dims, name
+        assert ds[name].attrs["units"] == units, name
+    for v in ds.data_vars.values():
+        assert "units" in v.attrs
+    for key in ("cpu_model", "cpu_count", "numba_version", "numba_threading_layer", "study",
+                "git_revision"):
+        assert key in ds.attrs, key
+    assert ds.attrs["study"] == "bench"
+
+
+def test_values_are_sane(bench_ds):
+    ds = bench_ds
+    assert (ds.status.values == "ok").all(), ds.status.values
+    psps = ds.particle_steps_per_second.values
+    assert np.isfinite(psps).all() and (psps > 0).all()
+    bpp = ds.bytes_per_particle.values
+    assert ((bpp > 100) & (bpp < 1e6)).all(), bpp
+    n = ds.n_particles_actual.values
+    assert ((n > 1000) & (n < 4000)).all(), n  # "about N" particles
+    st = ds.startup_time.values
+    assert np.isfinite(st).all() and (st > 0).all(), st
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["bench", "--particles", "0"], "--particles: 0 is out of range"),
+    (["bench", "--solver", "magic"], "--solver: 'magic' is not benchmarked"),
+    (["bench", "--threads", "0"], "--threads: 0 is out of range"),
+])
+def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path):
+    assert cli.main(argv + ["--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "bench.nc").exists()
+
+
+def test_a_failed_measurement_is_a_status_not_a_crash():
+    from sph import bench
+
+    r = bench.measure("csph", 2000, 1, timeout=0.01)
+    assert r["status"].startswith("error: timed out")
+    assert math.isnan(bench.startup_time("hpm", 2000, timeout=0.01)["startup_time"])
