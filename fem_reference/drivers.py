@@ -16,7 +16,7 @@ import numpy as np
 
 from .assembly import Discretisation
 from .dynamic import newmark
-from .mesh import block, rectangle
+from .mesh import block, quarter_ring, rectangle
 from .modal import lowest_modes
 from .static import Problem, TangentSolver, load_path
 
@@ -96,22 +96,34 @@ def solve_ss_curve(scene, resolution: int = 2, rtol: float = 1e-9, maxit: int = 
 # Cantilever
 # ------------------------------------------------------------------------------------------------
 
-def cantilever_problem(scene, resolution: int, aspect: float = 1.0, element=None):
+def cantilever_problem(scene, resolution: int, aspect: float = 1.0, element=None,
+                       tip_load: str = "traction", fbar=None):
     """The discretised cantilever: (problem, tip DOFs (x, y)); λ is the dimensionless load.
-    ``element``: (scalar element, quadrature order) other than the default Q2 (for tests)."""
+    ``element``: (scalar element, quadrature order) other than the default Q2 (for tests).
+    ``tip_load``: 'traction' (the scene's uniform dead shear traction on X = L) or 'point' (the
+    same total force as a point load on the tip mid-node (L, 0)). ``fbar``: see
+    :class:`fem_reference.assembly.Discretisation` (plane strain only)."""
     L, H = scene.L, scene.H
-    disc = Discretisation(rectangle(L, H, resolution, aspect), element=element)
+    disc = Discretisation(rectangle(L, H, resolution, aspect), element=element, fbar=fbar)
     disc.set_fixed(disc.dofs_on(lambda x: x[0] < 1e-9 * L))
-    f_unit = disc.traction_load(lambda x: x[0] > L * (1 - 1e-9),
-                                np.array([0.0, -scene.force(1.0) / H]))
-    problem = Problem(disc, scene.material, scene.plane, lambda lam: np.zeros(len(disc.fixed)),
-                      lambda lam: lam * f_unit)
     tip = np.array([L, 0.0])
+    point_loads = ()
+    if tip_load == "traction":
+        f_unit = disc.traction_load(lambda x: x[0] > L * (1 - 1e-9),
+                                    np.array([0.0, -scene.force(1.0) / H]))
+    elif tip_load == "point":
+        f_unit = np.zeros(disc.N)
+        point_loads = ((tip, np.array([0.0, -scene.force(1.0)])),)
+    else:
+        raise ValueError(f"tip_load: {tip_load!r} is not one of 'traction', 'point'")
+    problem = Problem(disc, scene.material, scene.plane, lambda lam: np.zeros(len(disc.fixed)),
+                      lambda lam: lam * f_unit, point_loads=point_loads)
     return problem, (disc.node_dof(tip, 0), disc.node_dof(tip, 1))
 
 
 def solve_cantilever(scene, resolution: int = 4, max_increment: float = 3.0, rtol: float = 1e-9,
-                     maxit: int = 25, aspect: float = 1.0, element=None) -> dict:
+                     maxit: int = 25, aspect: float = 1.0, element=None, tip_load: str = "traction",
+                     fbar=None) -> dict:
     """Static tip-loaded cantilever with ``resolution`` elements across H (elements about square).
 
     Returns dict(load (dimensionless P L²/(E I)), force (N/m), tip_deflection (m, positive
@@ -122,7 +134,7 @@ def solve_cantilever(scene, resolution: int = 4, max_increment: float = 3.0, rto
     t0 = time.perf_counter()
     loads = np.asarray(scene.loads, dtype=float)
     n = len(loads)
-    problem, (ix, iy) = cantilever_problem(scene, resolution, aspect, element)
+    problem, (ix, iy) = cantilever_problem(scene, resolution, aspect, element, tip_load, fbar)
     disc = problem.disc
     out = dict(load=loads, force=np.array([scene.force(p) for p in loads]),
                tip_deflection=np.full(n, np.nan), tip_horizontal=np.full(n, np.nan),
@@ -151,6 +163,107 @@ def solve_cantilever(scene, resolution: int = 4, max_increment: float = 3.0, rto
             out["solve_time"][k] = r["solve_time"]
     except Exception as err:  # a failed run is a result (contract.md)
         out["status"] = [_error_status(err)] * n
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Thick-walled cylinder (a locking benchmark, not a scene)
+# ------------------------------------------------------------------------------------------------
+
+def cylinder_problem(material, a: float, b: float, n_r: int, n_theta: int,
+                     control: str = "pressure", fbar=None):
+    """Plane-strain thick-walled cylinder a ≤ R ≤ b under internal loading, one quadrant
+    (:func:`fem_reference.mesh.quarter_ring`) with symmetry rollers (u_X = 0 on X = 0, u_Y = 0 on
+    Y = 0) and a free outer surface.
+
+    ``control``: 'pressure' — λ is a dead bore pressure (nominal traction λ e_R on the reference
+    bore, see :meth:`~fem_reference.assembly.Discretisation.pressure_load`); 'displacement' — λ is
+    a prescribed radial displacement of every bore node (u = λ e_R, no tangential motion, which
+    the axisymmetric solution satisfies). Returns (problem, dict(bore, outer: the x DOFs of the
+    nodes on R = a and R = b (the y DOF of each is the next one), e_bore, e_outer: their unit
+    radial vectors (2, n))).
+    """
+    disc = Discretisation(quarter_ring(a, b, n_r, n_theta), fbar=fbar)
+    # facets are selected by their chord midpoints, at radius r cos(π/(4 n_θ)) on a circle r
+    c = np.cos(np.pi / (4 * n_theta))
+    if not b * (1 - c) < 0.5 * (b - a) / n_r:
+        raise ValueError("n_theta: too few hoop elements for the radial size (the outer chords "
+                         "would not be told from the radial facets)")
+    on_bore = lambda x: np.hypot(x[0], x[1]) < a * (1 + 1e-9)  # noqa: E731
+    on_outer = lambda x: np.hypot(x[0], x[1]) > b * c * (1 - 1e-9)  # noqa: E731
+    tol = 1e-9 * b
+    rollers = [disc.dofs_on(lambda x: x[0] < tol, 0), disc.dofs_on(lambda x: x[1] < tol, 1)]
+    bore = disc.dofs_on(on_bore)
+    X = disc.basis.doflocs
+    bx = bore[bore % 2 == 0]  # x DOFs of the bore nodes; the y DOF is bx + 1 (interleaved)
+    ox = disc.dofs_on(on_outer, 0)
+    e_bore = X[:, bx] / np.hypot(X[0, bx], X[1, bx])
+    e_outer = X[:, ox] / np.hypot(X[0, ox], X[1, ox])
+    if control == "pressure":
+        disc.set_fixed(np.concatenate(rollers))
+        f_unit = disc.pressure_load(on_bore, 1.0)
+        problem = Problem(disc, material, "strain", lambda lam: np.zeros(len(disc.fixed)),
+                          lambda lam: lam * f_unit)
+    elif control == "displacement":
+        disc.set_fixed(np.concatenate(rollers + [bore]))
+        unit = np.zeros(disc.N)
+        unit[bx], unit[bx + 1] = e_bore[0], e_bore[1]
+        g = unit[disc.fixed]
+        problem = Problem(disc, material, "strain", lambda lam: lam * g,
+                          lambda lam: np.zeros(disc.N))
+    else:
+        raise ValueError(f"control: {control!r} is not one of 'pressure', 'displacement'")
+    return problem, dict(bore=bx, e_bore=e_bore, outer=ox, e_outer=e_outer)
+
+
+def solve_cylinder(material, a: float, b: float, n_r: int, n_theta: int, loads,
+                   control: str = "pressure", fbar=None, max_increment: float = np.inf,
+                   rtol: float = 1e-9, maxit: int = 25) -> dict:
+    """Follow the loads λ of :func:`cylinder_problem` and measure at each.
+
+    Returns dict(load, bore_displacement (mean radial displacement of the bore nodes, m),
+    outer_displacement (the same on R = b), pressure_nominal (radial bore reaction over the
+    reference quarter-bore length aπ/2, Pa; with 'pressure' control it is λ itself),
+    pressure (the reaction over the current length (a + u_a)π/2: the Cauchy pressure),
+    status (per load), residual_history (per load, per increment), n_dof, wall_time).
+    With 'pressure' control the reaction is the applied load and both pressures follow from λ.
+    """
+    t0 = time.perf_counter()
+    loads = np.asarray(loads, dtype=float)
+    n = len(loads)
+    problem, nodes = cylinder_problem(material, a, b, n_r, n_theta, control, fbar)
+    disc = problem.disc
+    bx, ox = nodes["bore"], nodes["outer"]
+    out = dict(load=loads, bore_displacement=np.full(n, np.nan),
+               outer_displacement=np.full(n, np.nan), pressure_nominal=np.full(n, np.nan),
+               pressure=np.full(n, np.nan), status=["error: not run"] * n,
+               residual_history=[[] for _ in range(n)], n_dof=int(disc.N))
+
+    def radial(v, idx, e):
+        return v[idx] * e[0] + v[idx + 1] * e[1]
+
+    def measure(k, lam, state):
+        ua = float(np.mean(radial(state.u, bx, nodes["e_bore"])))
+        out["bore_displacement"][k] = ua
+        out["outer_displacement"][k] = float(np.mean(radial(state.u, ox, nodes["e_outer"])))
+        if control == "pressure":
+            pn = lam
+        else:
+            f = problem.evaluate(state.u, state, tangent=False)["f_int"]
+            # Σ_a f_a·e_R(X_a) over the bore nodes: the consistent discretisation of ∫ p ds
+            pn = float(np.sum(radial(f, bx, nodes["e_bore"]))) / (a * np.pi / 2)
+        out["pressure_nominal"][k] = pn
+        out["pressure"][k] = pn * a / (a + ua)
+
+    try:
+        recs, _ = load_path(problem, loads, max_increment=max_increment, rtol=rtol, maxit=maxit,
+                            callback=measure)
+        for k, r in enumerate(recs):
+            out["status"][k] = r["status"]
+            out["residual_history"][k] = r["residual_history"]
+    except Exception as err:  # a failed run is a result (contract.md)
+        out["status"] = [_error_status(err)] * n
+    out["wall_time"] = time.perf_counter() - t0
     return out
 
 

@@ -14,7 +14,7 @@ def lowest_modes(problem: Problem, k: int = 3):
     disc = problem.disc
     st = problem.initial_state()
     pt = problem.evaluate(st.u, st, tangent=True)
-    K0 = disc.tangent(pt["A"]).tocsc()
+    K0 = problem.tangent(pt).tocsc()
     M = disc.mass(problem.material.rho)[disc.free][:, disc.free].tocsc()
     lam, phi = spla.eigsh(K0, k=k, M=M, sigma=0.0, which="LM")
     order = np.argsort(lam)

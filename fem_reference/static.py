@@ -37,11 +37,28 @@ class State:
 
 @dataclass
 class Problem:
+    """``f_ext(λ)`` holds the distributed loads (tractions, pressures); ``point_loads``, a sequence
+    of (x (d,), force (d,)) pairs, adds point forces on the nodes at x, scaled by λ like f_ext.
+    The element formulation (standard or F-bar) is the discretisation's (``disc.fbar``)."""
+
     disc: Discretisation
     material: Material
     plane: str | None  # 'strain', 'stress' or None in 3-D
     fixed_values: Callable[[float], np.ndarray]  # λ -> values of disc.fixed (len(disc.fixed),)
     f_ext: Callable[[float], np.ndarray]  # λ -> (N,)
+    point_loads: tuple = ()
+
+    def __post_init__(self):
+        self._f_point = None
+        if len(self.point_loads):
+            self._f_point = sum(self.disc.point_load(x, f) for x, f in self.point_loads)
+        if self.disc.fbar is not None and self.plane != "strain":
+            raise ValueError(f"plane: F-bar needs plane strain, not {self.plane!r}")
+
+    def external(self, lam: float) -> np.ndarray:
+        """The external force vector (N,) at load parameter λ."""
+        f = self.f_ext(lam)
+        return f if self._f_point is None else f + lam * self._f_point
 
     def initial_state(self) -> State:
         n = self.disc.nel * self.disc.nqp
@@ -49,16 +66,41 @@ class Problem:
 
     def evaluate(self, u: np.ndarray, state: State, tangent: bool = True) -> dict:
         """Material update from the committed ``state`` at displacement u: P, A, new history,
-        status, F33, J (points), f_int (N,)."""
-        H = self.disc.displacement_gradient(u)
-        out = update(self.material, H, state.history, self.plane, tangent=tangent, F33=state.F33)
-        d = self.disc.d
-        Fd = H + np.eye(d)
-        J = np.linalg.det(Fd) * (out["F33"] if d == 2 else 1.0)
-        out["J"] = J
+        status, F33, J (points), f_int (N,).
+
+        With F-bar, the material is evaluated at F̄, ``P`` is the stress P̃ = α⁻¹ P(F̄) that the
+        internal force integrates (its Cauchy stress P̃ Fᵀ/J is σ(F̄)), ``A`` is ∂P/∂F at F̄ and
+        ``fbar`` holds the kinematics for :meth:`tangent`; ``J`` is det F and ``Jbar`` J̄."""
+        disc = self.disc
+        H = disc.displacement_gradient(u)
+        kin = None
+        if disc.fbar is not None:
+            kin = disc.fbar_kinematics(H)
+            good = np.all(kin["J"] > 0) and np.all(kin["Jbar"] > 0)
+            Hm = kin["Hbar"] if good else H
+        else:
+            Hm = H
+        out = update(self.material, Hm, state.history, self.plane, tangent=tangent, F33=state.F33)
+        d = disc.d
+        if kin is not None:
+            out["J"], out["Jbar"], out["fbar"] = kin["J"], kin["Jbar"], kin
+            J = np.minimum(kin["J"], kin["Jbar"])
+            if good:
+                out["P_bar"] = out["P"]
+                out["P"] = out["P"] / kin["alpha"][:, None, None]
+        else:
+            Fd = H + np.eye(d)
+            J = np.linalg.det(Fd) * (out["F33"] if d == 2 else 1.0)
+            out["J"] = J
         out["ok"] = bool(np.all(J > 0) and np.all(np.isfinite(out["P"])) and np.all(out["status"] == 0))
-        out["f_int"] = self.disc.internal_force(out["P"]) if out["ok"] else None
+        out["f_int"] = disc.internal_force(out["P"]) if out["ok"] else None
         return out
+
+    def tangent(self, pt: dict) -> sp.csr_matrix:
+        """The condensed tangent K_ff at the point state ``pt`` of :meth:`evaluate`."""
+        if self.disc.fbar is not None:
+            return self.disc.fbar_tangent(pt["fbar"], pt["P_bar"], pt["A"])
+        return self.disc.tangent(pt["A"])
 
 
 @dataclass
@@ -139,7 +181,7 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
     solver = TangentSolver() if solver is None else solver
     disc = problem.disc
     free = disc.free
-    fext = problem.f_ext(lam)
+    fext = problem.external(lam)
     u = u0.copy()
     res = NewtonResult(False, u, {})
     t0 = time.perf_counter()
@@ -175,7 +217,7 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
             res.reason = f"no convergence in {maxit} iterations (residual {rn:.2e})"
             break
         t0 = time.perf_counter()
-        K = disc.tangent(pt["A"])
+        K = problem.tangent(pt)
         if extra_matrix is not None:
             K = K + extra_matrix
         t1 = time.perf_counter()

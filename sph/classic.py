@@ -33,11 +33,13 @@ import time
 import numpy as np
 from numba import njit, prange
 
+from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
 from workbench.materials.kernels import material_point
 
 from . import lattice
 from .diagnostics import probe_displacement
-from .integrate import cfl_time_step, check_dt_factor, kick_drift, kick_row, run_monitored
+from .integrate import (cfl_time_step, check_dt_factor, kick_drift, kick_row, monitor_chunk,
+                        run_monitored)
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
 from .neighbours import drop_cross_body, neighbour_list
 
@@ -345,12 +347,13 @@ def solve(scene, resolution: int, **options) -> dict:
 def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None, h_ratio: float = 1.3,
                 alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
                 stress: str = "hypoelastic", n_out: int = 400, periods: float | None = None,
-                energy_growth: float = 0.5) -> dict:
+                energy_growth: float = 0.5, fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
     """The oscillating plate (004 D) with classic SPH; keys as :func:`sph.hpm.solve_plate`.
     The clamp block's particles are fixed; the tip is the probe ``tip_mid`` of the cell lattice.
     The artificial viscosity dissipates energy: recorded as ``dissipated`` (status 'ok' with a
     ``note``), not as instability; the period is read from the tip history whenever it has two or
-    more zero crossings."""
+    more zero crossings. ``fields`` (a folder, or None): particle fields (the carried Cauchy
+    stress) as the ParaView series ``plate_sph_H<resolution>.pvd``, about ``field_frames`` frames."""
     from workbench import analytic
 
     dt_factor = scene.dt_factor if dt_factor is None else dt_factor
@@ -365,10 +368,15 @@ def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None, h_r
                 fixed=fixed, v0=v0)
     dt = body.time_step(dt_factor)
     t_end = (scene.periods if periods is None else periods) * analytic.plate_period(scene)
+    n_steps = int(math.ceil(t_end / dt))
+    snap = Snapshots.open(fields, series_name(scene.name, "sph", resolution), ps.X, scene.material,
+                          lambda: dict(t=body.t, x=body.x, v=body.v, sigma=body.sigma,
+                                       history=body.hist),
+                          n_steps, monitor_chunk(n_steps, n_out), field_frames)
     out = run_monitored(lambda k: body.step(dt, k), body.energies,
                         lambda: probe_displacement(ps, "tip_mid", body.x)[1],
-                        lambda: body.status.any(), body, int(math.ceil(t_end / dt)), n_out,
-                        energy_growth)
+                        lambda: body.status.any(), body, n_steps, n_out,
+                        energy_growth, snapshot=snap)
     wall = out["wall_time"]
     out.update(dt=dt, steps=int(body.steps), n_particles=int(body.n),
                particle_steps_per_second=body.n * body.steps / wall if wall > 0 else float("nan"))

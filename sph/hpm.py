@@ -49,11 +49,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
+from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
 from workbench.materials.kernels import material_point
 
 from . import lattice
 from .diagnostics import probe_displacement, strain_energy
-from .integrate import cfl_time_step, check_dt_factor, kick_drift_row, kick_row, run_monitored
+from .integrate import (cfl_time_step, check_dt_factor, kick_drift_row, kick_row, monitor_chunk,
+                        run_monitored)
 from .kernels import JIT, N_CHUNKS
 from .neighbours import drop_cross_body, neighbour_list
 
@@ -427,7 +429,7 @@ def solve(scene, resolution: int, **options) -> dict:
 def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
                 re_ratio: float = RE_RATIO, stabilisation: float = 0.0, scheme: str = "verlet",
                 n_out: int = 400, periods: float | None = None, energy_growth: float = 0.5,
-                mode: str = "node") -> dict:
+                mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
     """The oscillating plate (004 D): particles of :func:`sph.lattice.plate`, the clamp block fixed,
     initial velocity of eq. 13 (Gray et al.'s mode shape).
 
@@ -445,6 +447,9 @@ def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
     total energy *grown* by more than ``energy_growth`` relative) ends the run with status
     'unstable: <reason> at t=…'; a loss of energy is not instability (see
     :func:`sph.integrate.run_monitored`).
+
+    ``fields`` (a folder, or None): particle fields as the ParaView series
+    ``plate_hpm_H<resolution>.pvd``, about ``field_frames`` frames (see :func:`sph.csph.solve_plate`).
     """
     from workbench import analytic
 
@@ -461,14 +466,26 @@ def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
     st = init(model, v0)
     dt = time_step(model, dt_factor)
     t_end = (scene.periods if periods is None else periods) * analytic.plate_period(scene)
-    return _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth)
+    n_steps = int(math.ceil(t_end / dt))
+    snap = Snapshots.open(fields, series_name(scene.name, "hpm", resolution), model.X, mat,
+                          lambda: _field_state(st), n_steps, monitor_chunk(n_steps, n_out),
+                          field_frames)
+    return _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth,
+                        snapshot=snap)
 
 
-def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, a_ext=None):
+def _field_state(st: State) -> dict:
+    """The state for a field snapshot: F of the last step (eq. 4) and the committed history."""
+    return dict(t=st.t, x=st.x, v=st.v, F=st.F, history=st.h)
+
+
+def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, a_ext=None,
+                 snapshot=None):
     out = run_monitored(
         lambda k: advance(model, st, dt, k, fixed=fixed, a_ext=a_ext, scheme=scheme),
         lambda: energies(model, st), lambda: probe_displacement(ps, "tip_mid", st.x)[1],
-        lambda: st.status.any(), st, int(math.ceil(t_end / dt)), n_out, energy_growth)
+        lambda: st.status.any(), st, int(math.ceil(t_end / dt)), n_out, energy_growth,
+        snapshot=snapshot)
     wall = out["wall_time"]
     out.update(dt=dt, steps=int(st.steps), n_particles=int(model.n),
                particle_steps_per_second=model.n * st.steps / wall if wall > 0 else float("nan"),
@@ -478,7 +495,7 @@ def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, 
 
 def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_ratio: float = RE_RATIO,
                      stabilisation: float = 0.0, rtol: float = 1e-5, max_steps: int = 400000,
-                     mode: str = "node") -> dict:
+                     mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
     """Static tip-loaded cantilever (004 E) by dynamic relaxation: the HPM dynamics with
     mass-proportional damping c = 2 ω₁ (about critical for the first bending mode, ω₁ from the
     Euler–Bernoulli beam), each load of ``scene.loads`` applied as equal forces on the tip column
@@ -487,6 +504,8 @@ def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_rat
 
     Returns dict(load (dimensionless), tip_deflection (m, positive downward), tip_horizontal (m,
     shortening), wall_time (s, cumulative to reach each load), n_particles, status (per load), steps (per load)).
+    ``fields`` (a folder, or None): the relaxed state of every load as one frame of the ParaView
+    series ``cantilever_hpm_H<resolution>.pvd`` ("time" = the load).
     """
     from workbench import analytic
 
@@ -507,6 +526,10 @@ def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_rat
                tip_horizontal=np.full(len(loads), np.nan), wall_time=np.zeros(len(loads)),
                n_particles=int(model.n), status=["not run"] * len(loads), steps=np.zeros(len(loads), int))
     window = max(50, int(0.25 * 2 * math.pi / omega1 / dt))
+    load_now = [0.0]
+    snap = Snapshots.open(fields, series_name(scene.name, "hpm", resolution), model.X, mat,
+                          lambda: dict(_field_state(st), t=load_now[0]), len(loads), 1,
+                          max(1, len(loads)))
     for k, load in enumerate(loads):
         t0 = time.perf_counter()
         a_ext = np.zeros((ps.n, 2))
@@ -532,6 +555,9 @@ def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_rat
         out["status"][k] = status
         if status != "ok":
             break
+        if snap:
+            load_now[0] = float(load)
+            snap(k + 1)
         out["tip_deflection"][k] = -probe_displacement(ps, "tip_mid", st.x)[1]
         out["tip_horizontal"][k] = -probe_displacement(ps, "tip_mid", st.x)[0]
     return out

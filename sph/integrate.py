@@ -97,8 +97,13 @@ def velocity_verlet(x, v, acc, accel_fn, dt: float, n_steps: int, fixed=None, v_
     return n_steps
 
 
+def monitor_chunk(n_steps: int, n_out: int) -> int:
+    """Steps per chunk of :func:`run_monitored`."""
+    return max(1, n_steps // n_out)
+
+
 def run_monitored(step, energies, observe, failed, state, n_steps: int, n_out: int,
-                  energy_growth: float) -> dict:
+                  energy_growth: float, snapshot=None) -> dict:
     """The monitored time loop of the plate drivers (hpm, classic SPH): ``n_steps`` steps in about
     ``n_out`` chunks; after each chunk the energies and the observed quantity are recorded.
 
@@ -109,12 +114,18 @@ def run_monitored(step, energies, observe, failed, state, n_steps: int, n_out: i
     (:func:`sph.diagnostics.energy_change`, one-sided). A loss of energy is recorded as
     ``dissipated`` (fraction of the initial energy lost at the end, ≥ 0) with a ``note`` when it
     exceeds ``energy_growth``; the status stays 'ok'. ``period`` and ``amplitude`` come from the
-    observed history by :func:`sph.diagnostics.period_amplitude` (NaN for an unstable run)."""
+    observed history by :func:`sph.diagnostics.period_amplitude` (NaN for an unstable run).
+
+    ``snapshot`` (optional, a :class:`workbench.fields.Snapshots` built with ``chunk`` =
+    :func:`monitor_chunk`): called with the steps done before the loop, after every chunk and,
+    ``final=True``, at the end — field output between chunks, outside the compiled steps."""
     import time
 
     from .diagnostics import energy_change, period_amplitude
 
-    per = max(1, n_steps // n_out)
+    per = monitor_chunk(n_steps, n_out)
+    if snapshot is not None:
+        snapshot(0)
     times, obs = [0.0], [0.0]
     ke, pe = energies()
     kes, pes = [ke], [pe]
@@ -141,6 +152,10 @@ def run_monitored(step, energies, observe, failed, state, n_steps: int, n_out: i
         if grew:
             status = f"unstable: total energy grew by {change:+.3g} at t={state.t:.4g} s"
             break
+        if snapshot is not None:
+            snapshot(done_total)
+    if snapshot is not None:
+        snapshot(done_total, final=True)
     t, u = np.asarray(times), np.asarray(obs)
     T, A = period_amplitude(t, u) if status == "ok" else (math.nan, math.nan)
     ke_a, pe_a = np.asarray(kes), np.asarray(pes)

@@ -16,7 +16,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import Cantilever
 
-from .common import Gate, ladder, observed_order
+from .common import Gate, field_options, field_series, ladder, observed_order
 from .sweep import Task, run_tasks
 
 NAME = "cantilever"
@@ -26,6 +26,11 @@ SOLVERS = ("analytic", "fem", "csph", "hpm")
 RESOLUTIONS = {"fem": (2, 4, 8, 16), "csph": (5, 10, 20, 40), "hpm": (5, 10)}
 QUICK_RESOLUTIONS = {"fem": (2, 4, 8), "csph": (5, 10), "hpm": (5,)}
 ERROR_LABEL = "relative tip-deflection error vs converged FEM [-]"
+
+# The field snapshot of the report (``workbench run cantilever --fields``): the CSPH series, the
+# equilibrium of the largest load, coloured by the von Mises stress.
+FIELD_VIEW = dict(prefer="cantilever_csph", scalars="von_mises", label="von Mises stress [Pa]",
+                  time_label="P L^2/(E I) = {:g}")
 
 # Tolerances, each with its reason.
 # FEM at the small load against Timoshenko: the 2-D continuum differs from Timoshenko beam theory by
@@ -40,7 +45,10 @@ TOL_CSPH_FEM = 0.03
 
 
 def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: bool = False,
-        scheduler: str | None = None) -> xr.Dataset:
+        scheduler: str | None = None, fields=None, field_runs=None) -> xr.Dataset:
+    """``fields`` (a folder, or None): the particle runs write their fields there as ParaView
+    series (``field_runs``: the (solver, resolution) pairs that do; None: all); the names of the
+    written series are the dataset's ``field_series`` attribute. The FEM writes none."""
     scene = scene or Cantilever()
     solvers = list(solvers or SOLVERS)
     for s in solvers:
@@ -60,7 +68,8 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
     wall = np.full(shape, np.nan)
     ndof = np.zeros(shape[:2], dtype=np.int64)
     status = np.full(shape[:2], "not run", dtype=object)
-    tasks = [Task.make(s, scene, r) for s, lad in ladders.items() for r in lad]
+    tasks = [Task.make(s, scene, r, **field_options(s, r, fields, field_runs))
+             for s, lad in ladders.items() for r in lad]
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
     for i, s in enumerate(solvers):
         if s == "analytic":
@@ -109,6 +118,8 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
     ds["fem_converged"] = (("load",), ref, {"units": "m", "long_name":
                                             "FEM tip deflection extrapolated to zero element size"})
     ds.attrs.update(results.provenance(NAME, scene))
+    if fields is not None:
+        ds.attrs["field_series"] = field_series(scene, tasks)
     ds.attrs["plane"] = scene.plane
     ds.attrs["analytic_solver"] = "inextensible elastica (Bisshopp & Drucker 1945) of the plane beam"
     return ds

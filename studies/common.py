@@ -69,15 +69,25 @@ class Gate:
     tolerance: float
     reason: str
     passed: bool
+    shown: str = ""  # how a yes/no gate reads in the report (see :meth:`expect`)
 
     @classmethod
     def at_most(cls, name: str, observed: float, tolerance: float, reason: str) -> "Gate":
         ok = bool(np.isfinite(observed) and observed <= tolerance)
         return cls(name, float(observed), float(tolerance), reason, ok)
 
+    @classmethod
+    def expect(cls, name: str, observed: str, expected: str, reason: str) -> "Gate":
+        """A qualitative gate: an observed outcome (e.g. 'stable', 'unstable') against the one the
+        literature predicts; ``observed`` is 1 where they differ, 0 where they agree."""
+        ok = observed == expected
+        return cls(name, 0.0 if ok else 1.0, 0.0, reason, ok,
+                   shown=f"{observed} (expected {expected})")
+
     def line(self) -> str:
         mark = "PASS" if self.passed else "FAIL"
-        return f"{mark}  {self.name}: {self.observed:.4g} (tolerance {self.tolerance:.4g}) — {self.reason}"
+        value = self.shown or f"{self.observed:.4g} (tolerance {self.tolerance:.4g})"
+        return f"{mark}  {self.name}: {value} — {self.reason}"
 
 
 def observed_order(h, err) -> float:
@@ -116,3 +126,37 @@ def ladder(solver: str, resolutions, study, quick: bool) -> list[int]:
     if solver == "fem" and study.NAME != "ss_curve":
         return default
     return check_resolutions(resolutions)
+
+
+FIELD_SOLVERS = ("csph", "hpm", "sph")
+"""The solvers that write particle fields (``fields=<folder>``); the FEM reference returns only the
+tip history, so it has no fields to write."""
+
+
+def field_options(solver: str, resolution: int, fields, field_runs=None) -> dict:
+    """The solver options asking one run for field output: ``{"fields": folder}`` when ``fields``
+    (a folder) is given, ``solver`` writes fields, and (solver, resolution) is in ``field_runs``
+    (None: every run); else ``{}``."""
+    if fields is None or solver not in FIELD_SOLVERS:
+        return {}
+    if field_runs is not None and (solver, int(resolution)) not in set(field_runs):
+        return {}
+    return {"fields": str(fields)}
+
+
+def field_series(scene, tasks) -> str:
+    """The ``.pvd`` file names the ``tasks`` that asked for fields have written (those that exist),
+    comma-separated, for the dataset's ``field_series`` attribute."""
+    from pathlib import Path
+
+    from workbench.fields import series_name
+
+    names = []
+    for t in tasks:
+        folder = dict(t.options).get("fields")
+        if folder is None:
+            continue
+        pvd = Path(folder) / f"{series_name(scene.name, t.solver, t.resolution)}.pvd"
+        if pvd.exists():
+            names.append(pvd.name)
+    return ", ".join(names)

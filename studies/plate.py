@@ -16,7 +16,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import Plate
 
-from .common import Gate, ladder, observed_order
+from .common import Gate, field_options, field_series, ladder, observed_order
 from .sweep import Task, run_tasks
 
 NAME = "plate"
@@ -41,12 +41,18 @@ TOL_PERIOD = 0.03
 TOL_AMPLITUDE = 0.05
 TOL_DRIFT = 1e-3
 GATED = ("csph", "hpm")  # classic SPH is the baseline: it is expected to fail, not gated
+# The field snapshot of the report: the CSPH series (finest written), deformed particles coloured
+# by the von Mises stress, at the frame of largest displacement.
+FIELD_VIEW = dict(prefer="plate_csph", scalars="von_mises", label="von Mises stress [Pa]")
 # Table I (004): T c0 / L and A / L.
 TABLE_I = analytic.TABLE_I
 
 
 def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool = False,
-        scheduler: str | None = None) -> xr.Dataset:
+        scheduler: str | None = None, fields=None, field_runs=None) -> xr.Dataset:
+    """``fields`` (a folder, or None): the particle runs write their fields there as ParaView
+    series (``field_runs``: the (solver, resolution) pairs that do; None: all); the names of the
+    written series are the dataset's ``field_series`` attribute. The FEM writes none."""
     scene = scene or Plate()
     solvers = list(solvers or SOLVERS)
     for s in solvers:
@@ -72,7 +78,8 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
     hist = np.full(shp + (N_TIME,), np.nan)
     # The FEM contributes its modal period on every rung and one dynamic run on the finest.
     dyn = FEM_DYNAMIC[bool(quick)]
-    tasks = [Task.make(s, scene, r, **({"dynamic": r == dyn} if s == "fem" else {}))
+    tasks = [Task.make(s, scene, r, **({"dynamic": r == dyn} if s == "fem" else {}),
+                       **field_options(s, r, fields, field_runs))
              for s, lad in ladders.items() for r in lad]
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
     for i, s in enumerate(solvers):
@@ -121,6 +128,8 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
     ds["fem_modal_converged"] = ((), _extrapolated(ds.period.sel(solver="fem").values, ds.resolution.values),
                                  {"units": "s", "long_name": "FEM modal period extrapolated to zero element size"})
     ds.attrs.update(results.provenance(NAME, scene))
+    if fields is not None:
+        ds.attrs["field_series"] = field_series(scene, tasks)
     ds.attrs.update(analytic_period=T0, analytic_amplitude=A0, plane="strain",
                     clamp="rigid: particles in the clamp block fixed; FEM clamps X = 0")
     return ds

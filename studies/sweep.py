@@ -12,6 +12,10 @@ A failed task is a status in its result (``error: …``), never a lost sweep. Fi
 an on-disk cache keyed by the task's parameters and the code version (a hash of the package
 sources), so a re-run reuses them; ``WORKBENCH_CACHE`` moves the cache, ``WORKBENCH_NO_CACHE=1``
 disables it.
+
+Field output (``fields=<folder>``, ``field_frames``) is an option that changes no result: it is left
+out of the cache key, and a task that asks for fields is always run (a cached result has no fields
+on disk), its result then cached under the same key as the run without fields.
 """
 from __future__ import annotations
 
@@ -32,6 +36,8 @@ from .common import run_solver, summary_status
 
 log = logging.getLogger("workbench")
 PACKAGES = ("workbench", "sph", "fem_reference", "studies")
+FIELD_OPTIONS = ("fields", "field_frames")
+"""Solver options that only ask for field output: not part of the cache key (see module doc)."""
 
 
 @dataclass(frozen=True)
@@ -50,10 +56,15 @@ class Task:
     def label(self) -> str:
         return f"{self.scene.name} {self.solver} {self.resolution}"
 
+    @property
+    def writes_fields(self) -> bool:
+        return any(k == "fields" and v is not None for k, v in self.options)
+
     def key(self) -> str:
+        options = [list(o) for o in self.options if o[0] not in FIELD_OPTIONS]
         payload = dict(solver=self.solver, scene=type(self.scene).__name__,
                        params=dataclasses.asdict(self.scene), resolution=self.resolution,
-                       options=[list(o) for o in self.options], code=code_version())
+                       options=options, code=code_version())
         return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:24]
 
 
@@ -150,7 +161,7 @@ def run_tasks(tasks: list[Task], scheduler: str | None = None, title: str = "swe
     progress = Progress(len(tasks), title)
     todo = []
     for i, t in enumerate(tasks):
-        hit = _cache_get(t)
+        hit = None if t.writes_fields else _cache_get(t)
         if hit is not None:
             results[i] = hit
             progress.update(t, hit, cached=True)

@@ -20,3 +20,24 @@ def test_pre_asymptotic_ladder_is_extended_within_budget():
     assert cv.extend(res, err, wall, budget=2.0) == 40
     assert cv.extend(res, err, wall, budget=1.0) is None
     assert cv.extend(res, 2.0 * res ** -2.0, wall, budget=100.0) is None
+
+
+def test_cost_to_accuracy_picks_the_cheapest_run_within_the_target():
+    from workbench.report import cost_to_accuracy
+
+    rows = [dict(solver="a", resolution=5, error=0.02, wall_time=1.0),
+            dict(solver="a", resolution=10, error=0.002, wall_time=8.0),
+            dict(solver="a", resolution=20, error=0.0005, wall_time=60.0),
+            dict(solver="b", resolution=5, error=0.1, wall_time=3.0)]
+    t = cost_to_accuracy(rows, 0.01)
+    assert t[1][:2] == ["a", "resolution 10"] and t[1][3] == "8"
+    assert t[2][:2] == ["b", "not reached on this ladder"]
+
+
+def test_qualitative_gate_reads_as_outcome_and_fails_on_mismatch():
+    from studies.common import Gate
+
+    ok = Gate.expect("sph slab", "unstable", "unstable", "Swegle")
+    bad = Gate.expect("hpm ring", "unstable", "stable", "004")
+    assert ok.passed and not bad.passed
+    assert "unstable (expected unstable)" in ok.line() and bad.line().startswith("FAIL")

@@ -52,3 +52,19 @@ def test_datasets_follow_the_contract(verified, study):
             assert name in ds, name
     figure = "stability_max_dt.png" if study == "stability" else f"{study}_accuracy_vs_cost.png"
     assert (out / figure).stat().st_size > 5000
+
+
+def test_verify_writes_the_representative_fields(verified):
+    """One representative run (csph plate, H/dx = 10) writes its ParaView series; the report shows
+    a snapshot where this machine renders, else a note with the reason."""
+    from workbench.fields import can_render, series_frames
+
+    out, _ = verified
+    assert len(series_frames(out / "fields" / "plate_csph_H10.pvd")) >= 10
+    md = (out / "report.md").read_text()
+    assert "fields/plate_csph_H10.pvd" in md
+    ok, why = can_render()
+    if ok:
+        assert (out / "plate_fields_plate_csph_H10.png").stat().st_size > 5000
+    else:
+        assert "No snapshot in this report" in md

@@ -70,9 +70,12 @@ def cmd_run(args) -> int:
     study, scene, resolutions = _validated(args)
     section = run_study(args.study, args.out, args.quick, solvers=args.solver,
                         resolutions=resolutions, scene=scene, scheduler=args.scheduler,
-                        budget=args.budget)
+                        budget=args.budget, fields=args.fields)
     ds = section["dataset"]
     print(f"{args.study}: {Path(args.out) / (args.study + '.nc')}")
+    if args.fields:
+        series = [n.strip() for n in str(ds.attrs.get("field_series", "")).split(",") if n.strip()]
+        print(f"  fields: {', '.join(str(Path(args.out) / 'fields' / n) for n in series) or 'none written'}")
     for r in section["rows"]:
         print(f"  {r['solver']:<8} resolution {r['resolution']:<4} error {r['error']:.3e}  "
               f"wall {r['wall_time']:.3f} s")
@@ -115,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
                                        "cores) or a dask scheduler address")
     r.add_argument("--budget", type=float, default=0.0,
                    help="seconds for extending an unsettled convergence ladder (default 0: off)")
+    r.add_argument("--fields", action="store_true",
+                   help="write the particle runs' fields (displacement, velocity, stress, ε_p, "
+                        "damage) as ParaView series (.pvd + .vtp) under OUT/fields/")
     r.set_defaults(fn=cmd_run)
     v = sub.add_parser("verify", help="run the headline studies, apply the gates, write the report")
     v.add_argument("--quick", action="store_true")

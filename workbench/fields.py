@@ -90,8 +90,12 @@ def can_render() -> tuple[bool, str]:
         return False, f"off-screen rendering unavailable ({type(err).__name__}: {err})"
 
 
-def snapshot_png(vtk_file, png, scalars: str | None = None, title: str = "") -> Path | None:
-    """Render one field file to PNG off-screen; ``None`` where this machine cannot render."""
+def snapshot_png(vtk_file, png, scalars: str | None = None, title: str = "",
+                 label: str | None = None, axes: tuple[str, str] | None = None) -> Path | None:
+    """Render one field file to PNG off-screen; ``None`` where this machine cannot render.
+
+    ``label``: the scalar bar's title (default: ``scalars``), e.g. with units; ``axes``: titles of
+    the x and y axes (e.g. ``("x [m]", "y [m]")``), drawn with their bounds and ticks."""
     ok, _ = can_render()
     if not ok:
         return None
@@ -100,10 +104,153 @@ def snapshot_png(vtk_file, png, scalars: str | None = None, title: str = "") -> 
     mesh = pv.read(str(vtk_file))
     pl = pv.Plotter(off_screen=True, window_size=(900, 420))
     kw = dict(render_points_as_spheres=True, point_size=6) if isinstance(mesh, pv.PolyData) else {}
-    pl.add_mesh(mesh, scalars=scalars, cmap="viridis", scalar_bar_args=dict(title=scalars or ""), **kw)
+    bar = dict(title=label if label is not None else (scalars or ""))
+    if axes is not None:
+        bar.update(vertical=True, position_x=0.86, position_y=0.15, height=0.7, width=0.08)
+    pl.add_mesh(mesh, scalars=scalars, cmap="viridis", scalar_bar_args=bar, **kw)
     if title:
         pl.add_text(title, font_size=10)
     pl.view_xy()
+    if axes is not None:
+        pl.show_bounds(xtitle=axes[0], ytitle=axes[1], ztitle="", show_zaxis=False,
+                       location="outer", font_size=10, use_2d=True, fmt="%.3g",
+                       n_xlabels=5, n_ylabels=3)
+        _fit_xy(pl, mesh.bounds, window=(900, 420))
     pl.screenshot(str(png))
     pl.close()
     return Path(png)
+
+
+def _fit_xy(pl, bounds, window, left: float = 0.1, right: float = 0.8,
+            margin: float = 0.18) -> None:
+    """Parallel projection onto the xy plane with the body filling the window between the
+    fractions ``left`` and ``right`` of its width (axis labels to the left, the scalar bar to the
+    right) and ``margin`` of its height kept free above and below."""
+    x0, x1, y0, y1 = bounds[:4]
+    w, h = max(x1 - x0, 1e-30), max(y1 - y0, 1e-30)
+    ratio = window[0] / window[1]
+    half_h = 0.5 * max(h / (1.0 - 2 * margin), w / (0.95 * (right - left) * ratio))
+    cx = 0.5 * (x0 + x1) + (1.0 - left - right) * half_h * ratio
+    cy = 0.5 * (y0 + y1)
+    pl.enable_parallel_projection()
+    cam = pl.camera
+    cam.focal_point = (cx, cy, 0.0)
+    cam.position = (cx, cy, 10.0 * max(w, h))
+    cam.up = (0.0, 1.0, 0.0)
+    cam.parallel_scale = half_h
+
+
+# ------------------------------------------------------------------------------------------------
+# Snapshots of the particle drivers
+# ------------------------------------------------------------------------------------------------
+
+DEFAULT_FRAMES = 20
+"""Frames written over a run (besides the initial state) unless ``field_frames`` says otherwise."""
+
+
+def series_name(scene_name: str, method: str, resolution: int) -> str:
+    """The name of a run's field series, e.g. ``plate_csph_H10`` (resolution: particles across H)."""
+    return f"{scene_name}_{method}_H{int(resolution)}"
+
+
+def check_frames(frames) -> int:
+    if not (isinstance(frames, (int, np.integer)) and not isinstance(frames, bool) and frames >= 1):
+        raise ValueError(f"field_frames: {frames!r} is not allowed; an integer >= 1")
+    return int(frames)
+
+
+def particle_point_data(material, X, x, v, F=None, history=None, sigma=None) -> dict:
+    """Point data of one particle snapshot: ``displacement`` x − X (m), ``velocity`` (m/s),
+    ``stress`` (Cauchy, 3×3, Pa; plane strain keeps σ_zz), ``von_mises`` (Pa), and for a J2
+    material ``plastic_strain`` (equivalent plastic strain ε_p, -) and ``damage`` (D, -).
+
+    The Cauchy stress is ``sigma`` when the method carries it (classic SPH), else it is evaluated
+    from the deformation gradients F (N, 3, 3) and the committed ``history`` by the shared material
+    routine (no new stress state is created; the history is not changed)."""
+    from .materials import HIST_DAMAGE, HIST_EPS_P, evaluate
+
+    x = np.asarray(x, dtype=float)
+    d = x.shape[1]
+    if sigma is None:
+        if F is None:
+            raise ValueError("particle_point_data: give F or sigma")
+        sigma = evaluate(material, np.ascontiguousarray(F), history, stress="sigma")["stress"]
+    s = np.asarray(sigma, dtype=float)
+    if s.shape[1] < 3:  # a 2×2 in-plane stress: no σ_zz known
+        full = np.zeros((s.shape[0], 3, 3))
+        full[:, :s.shape[1], :s.shape[2]] = s
+        s = full
+    dev = s - np.einsum("nii->n", s)[:, None, None] / 3.0 * np.eye(3)
+    out = dict(displacement=x - np.asarray(X, dtype=float)[:, :d], velocity=np.asarray(v, dtype=float),
+               stress=s, von_mises=np.sqrt(1.5 * np.einsum("nij,nij->n", dev, dev)))
+    if material.law == "j2" and history is not None and np.shape(history)[1] > HIST_DAMAGE:
+        h = np.asarray(history)
+        out["plastic_strain"] = h[:, HIST_EPS_P].copy()
+        out["damage"] = h[:, HIST_DAMAGE].copy()
+    return out
+
+
+class Snapshots:
+    """Field output of a particle driver's time loop: a :class:`FieldSeries` written every
+    ``every`` steps from Python, between the calls of the compiled loop (never inside it).
+
+    The drivers advance in chunks of ``chunk`` steps (their recording interval); a snapshot is due
+    every ``every`` steps, a multiple of ``chunk`` chosen so that about ``frames`` frames cover the
+    ``n_steps`` of the run — so asking for fields changes neither the chunks nor any result. Call
+    ``snap(steps_done)`` after each chunk, ``snap(0)`` before the loop and ``snap(steps, final=True)``
+    after it (the final state is always written). ``state()`` returns dict(t, x, v and F + history
+    or sigma); see :func:`particle_point_data`."""
+
+    def __init__(self, folder, name: str, X, material, state, n_steps: int, chunk: int,
+                 frames: int = DEFAULT_FRAMES):
+        frames = check_frames(frames)
+        self.series = FieldSeries(folder, name)
+        self.X = np.asarray(X, dtype=float)
+        self.material = material
+        self.state = state
+        chunk = max(1, int(chunk))
+        n_chunks = max(1, -(-int(n_steps) // chunk))
+        self.every = chunk * max(1, -(-n_chunks // frames))
+        self.last = None
+
+    @classmethod
+    def open(cls, folder, *args, **kwargs) -> "Snapshots | None":
+        """``None`` when ``folder`` is None (no field output requested)."""
+        return None if folder is None else cls(folder, *args, **kwargs)
+
+    def __call__(self, steps_done: int, final: bool = False) -> Path | None:
+        if steps_done == self.last or not (final or steps_done % self.every == 0):
+            return None
+        self.last = steps_done
+        st = self.state()
+        data = particle_point_data(self.material, self.X, st["x"], st["v"], st.get("F"),
+                                   st.get("history"), st.get("sigma"))
+        return self.series.add(st["t"], st["x"], **data)
+
+
+def series_frames(pvd) -> list[tuple[float, Path]]:
+    """(time, file) of every frame listed in a ``.pvd`` collection."""
+    import xml.etree.ElementTree as ET
+
+    pvd = Path(pvd)
+    return [(float(e.get("timestep")), pvd.parent / e.get("file"))
+            for e in ET.parse(pvd).getroot().iter("DataSet")]
+
+
+def render_series(pvd, png, scalars: str = "von_mises", label: str = "von Mises stress [Pa]",
+                  title: str = "", time_label: str = "t = {:.4g} s") -> tuple[Path | None, str]:
+    """Snapshot of the frame of largest displacement of a particle series (deformed positions,
+    coloured by ``scalars``, the scalar bar titled ``label``), with the axes in metres and the
+    frame's time written with ``time_label``. Returns (png or None, reason when None)."""
+    ok, why = can_render()
+    if not ok:
+        return None, why
+    import pyvista as pv
+
+    frames = series_frames(pvd)
+    if not frames:
+        return None, f"{Path(pvd).name} lists no frames"
+    umax = [float(np.abs(pv.read(str(f)).point_data["displacement"]).max()) for _, f in frames]
+    t, f = frames[int(np.argmax(umax))]
+    text = f"{title}, {time_label.format(t)}" if title else time_label.format(t)
+    return snapshot_png(f, png, scalars=scalars, title=text, label=label, axes=("x [m]", "y [m]")), ""

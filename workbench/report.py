@@ -37,6 +37,23 @@ def _html_table(t: list[list[str]]) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
+def cost_to_accuracy(rows: list[dict], target: float = 0.01) -> list[list[str]]:
+    """Per solver, the cheapest run of the ladder whose error is at most ``target``: the wall time
+    to a given accuracy (issue 4), or 'not reached' with the best error of the ladder."""
+    out = [["solver", f"cheapest run within {100 * target:g} %", "its error", "wall time [s]"]]
+    for solver in dict.fromkeys(r["solver"] for r in rows):
+        mine = [r for r in rows if r["solver"] == solver and np.isfinite(r["error"])]
+        ok = [r for r in mine if r["error"] <= target]
+        if ok:
+            r = min(ok, key=lambda r: r["wall_time"])
+            out.append([solver, f"resolution {r['resolution']}", f"{r['error']:.2e}", f"{r['wall_time']:.3g}"])
+        elif mine:
+            best = min(mine, key=lambda r: r["error"])
+            out.append([solver, "not reached on this ladder", f"best {best['error']:.2e}",
+                        f"{best['wall_time']:.3g}"])
+    return out
+
+
 def write(outdir, sections: list[dict], quick: bool, wall_time: float) -> tuple[Path, Path]:
     """``sections``: per study, dict(name, verdict, gates (list of Gate), rows (error rows),
     orders (dict solver -> observed order), figures (paths), notes (list of str))."""
@@ -68,11 +85,15 @@ def write(outdir, sections: list[dict], quick: bool, wall_time: float) -> tuple[
             md += [f"Error ({s.get('error_label', 'error')}) of every run:", "", _md_table(t), ""]
             ht += [f"<p>Error ({html.escape(s.get('error_label', 'error'))}) of every run:</p>",
                    _html_table(t)]
+            t = cost_to_accuracy(s["rows"])
+            md += ["Wall time to 1 % error:", "", _md_table(t), ""]
+            ht += ["<p>Wall time to 1 % error:</p>", _html_table(t)]
         if s.get("orders"):
-            md += ["Observed convergence orders (least squares over the ladder): " + ", ".join(
-                f"{k} {v:.2f}" for k, v in s["orders"].items()), ""]
-            ht += ["<p>Observed convergence orders: " + html.escape(", ".join(
-                f"{k} {v:.2f}" for k, v in s["orders"].items())) + "</p>"]
+            text = ", ".join(f"{k} {v:.2f}" if np.isfinite(v) else f"{k} n/a (fewer than 3 resolutions)"
+                             for k, v in s["orders"].items())
+            md += ["Observed convergence orders (least squares over the ladder): " + text, ""]
+            ht += ["<p>Observed convergence orders (least squares over the ladder): "
+                   + html.escape(text) + "</p>"]
         for extra in s.get("tables", []):
             md += [extra["title"], "", _md_table(extra["table"]), ""]
             ht += [f"<p>{html.escape(extra['title'])}</p>", _html_table(extra["table"])]

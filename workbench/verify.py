@@ -12,23 +12,46 @@ from . import plots, report, results
 
 log = logging.getLogger("workbench")
 
+FIELD_RUNS = {"plate": {("csph", 10)}}
+"""The runs of ``workbench verify`` that write field output (study -> (solver, resolution) pairs):
+one representative run, the CSPH plate at H/Δx = 10 (in the quick ladder too)."""
+
 
 def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None,
-              scheduler: str | None = None, budget: float = 0.0) -> dict:
+              scheduler: str | None = None, budget: float = 0.0, fields=False,
+              field_runs=None) -> dict:
     """Run one study and write ``STUDY.nc`` and its figures; returns the report section.
 
     With a ``budget`` (s), a solver's ladder is extended by one level at a time while its observed
     order is not settled and the predicted cost of the next level fits in what is left
     (:mod:`studies.convergence`); finished runs come from the run cache.
+
+    ``fields`` (True, or a folder): the particle runs (``field_runs``: only these (solver,
+    resolution) pairs; None: all) write their fields as ParaView series under ``OUT/fields/`` (or
+    the folder); the section gets an off-screen snapshot where this machine can render, else a note
+    saying where the fields are and why there is no picture (:func:`field_section`).
     """
+    import inspect
+
     import studies
     from studies import convergence
     from studies.common import ladder
 
     study = studies.get(name)
+    outdir = Path(outdir)
+    field_dir = None
+    field_kw = {}
+    field_notes = []
+    if fields:
+        field_dir = outdir / "fields" if fields is True else Path(fields)
+        if "fields" in inspect.signature(study.run).parameters:
+            field_kw = dict(fields=field_dir, field_runs=field_runs)
+        else:
+            field_notes.append(f"Fields: the {name} study writes no field output.")
     t0 = time.perf_counter()
     ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick,
-                   scheduler=scheduler)
+                   scheduler=scheduler, **field_kw)
+    written = ds.attrs.get("field_series")
     extended = []
     while budget > 0:
         left = budget - (time.perf_counter() - t0)
@@ -49,7 +72,8 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
         log.info("%s: order not settled, ladder extended: %s", name, ", ".join(extended[-len(grow):]))
         ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick,
                        scheduler=scheduler)
-    outdir = Path(outdir)
+    if written is not None:
+        ds.attrs["field_series"] = written  # the extended ladders ran without field output
     results.write(ds, outdir / f"{name}.nc")
     figures = list(study.plot(ds, outdir))
     rows = study.errors(ds)
@@ -65,10 +89,53 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     if hasattr(study, "report_tables"):
         section["tables"] = study.report_tables(ds)
     section["notes"] = list(study.report_notes(ds)) if hasattr(study, "report_notes") else []
+    if field_kw:
+        field_notes += field_section(study, written or "", field_dir, outdir, figures)
+    section["notes"] += field_notes
     if extended:
         section["notes"].append("Ladder extended automatically (order not settled): "
                                 + ", ".join(extended) + ".")
     return section
+
+
+def field_section(study, written: str, field_dir: Path, outdir: Path, figures: list) -> list[str]:
+    """Report the field series a study wrote: render one snapshot (appended to ``figures``) where
+    this machine can, and return the notes — where the series are (open the .pvd in ParaView) and,
+    without a snapshot, why none could be rendered."""
+    from . import fields
+
+    names = [n.strip() for n in written.split(",") if n.strip()]
+    try:
+        where = field_dir.relative_to(outdir).as_posix()
+    except ValueError:
+        where = str(field_dir)
+    notes = []
+    if "fem" in getattr(study, "SOLVERS", ()):
+        notes.append("Fields: the FEM reference writes none (its driver returns only the tip "
+                     "history, no displacement field).")
+    if not names:
+        return notes + [f"Fields: none were written to {where}/ (no run that asked for them "
+                        "finished)."]
+    listed = ", ".join(f"{where}/{n}" for n in names)
+    view = dict(getattr(study, "FIELD_VIEW", {}))
+    pick = view.pop("prefer", None)
+    chosen = next((n for n in reversed(names) if pick and n.startswith(pick)), names[-1])
+    png = outdir / f"{study.NAME}_fields_{Path(chosen).stem}.png"
+    try:
+        got, why = fields.render_series(field_dir / chosen, png, **view,
+                                        title=f"{Path(chosen).stem} (deformed particles)")
+    except Exception as err:  # a picture is a bonus: never fail the study for it
+        got, why = None, f"rendering failed ({type(err).__name__}: {err})"
+    if got is not None:
+        figures.append(got)
+        notes.append(f"Fields (displacement, velocity, Cauchy stress, von Mises stress; ε_p and "
+                     f"damage for J2) written as ParaView series: {listed} (open the .pvd in "
+                     f"ParaView). Snapshot below: {Path(chosen).stem}, rendered off-screen.")
+    else:
+        notes.append(f"Fields (displacement, velocity, Cauchy stress, von Mises stress; ε_p and "
+                     f"damage for J2) written as ParaView series: {listed} (open the .pvd in "
+                     f"ParaView). No snapshot in this report: {why}.")
+    return notes
 
 
 def verify(outdir="results", quick: bool = False, scheduler: str | None = None,
@@ -84,7 +151,10 @@ def verify(outdir="results", quick: bool = False, scheduler: str | None = None,
     sections = []
     for name in studies.HEADLINE:
         log.info("study %s%s", name, " (quick)" if quick else "")
-        sections.append(run_study(name, outdir, quick, scheduler=scheduler, budget=budget))
+        # one representative run writes its fields (and the report shows a snapshot of it)
+        fields = dict(fields=True, field_runs=FIELD_RUNS[name]) if name in FIELD_RUNS else {}
+        sections.append(run_study(name, outdir, quick, scheduler=scheduler, budget=budget,
+                                  **fields))
         for g in sections[-1]["gates"]:
             log.info("%s", g.line())
     md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
