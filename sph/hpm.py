@@ -50,7 +50,7 @@ import numpy as np
 from numba import njit, prange
 
 from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
-from workbench.materials.kernels import material_point
+from workbench.materials.kernels import material_point, svk_point
 
 from . import lattice
 from .diagnostics import probe_displacement, strain_energy
@@ -146,13 +146,17 @@ def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_ne
     material routine's return code (0 ok)."""
     N = x.shape[0]
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    svk = prm[0] == 0.0  # SVK: the shared law called directly (no dispatch, no history)
     for c in prange(N_CHUNKS):
         F = np.empty((3, 3))
         P = np.empty((3, 3))
         A = np.empty((3, 3, 3, 3))
         for i in range(c * chunk, min(N, (c + 1) * chunk)):
             _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F)
-            status[i] = material_point(F, h_old[i], prm, P, h_new[i], A, False)
+            if svk:
+                status[i] = svk_point(F, prm, P, A, False)
+            else:
+                status[i] = material_point(F, h_old[i], prm, P, h_new[i], A, False)
             for k in range(3):
                 for l in range(3):
                     F_all[i, k, l] = F[k, l]
@@ -162,18 +166,23 @@ def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_ne
 
 
 @njit(inline="always", **JIT)
-def _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs):
-    """f_i = Σ_j w_ij (M_i + M_j) X_ij (eq. 7) plus, for cs ≠ 0, the stabilisation force."""
+def _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab):
+    """f_i = Σ_j w_ij (M_i + M_j) X_ij (eq. 7) plus, where ``stab`` and cs ≠ 0, the stabilisation
+    force."""
     fx = 0.0
     fy = 0.0
+    mi00 = M[i, 0, 0]
+    mi01 = M[i, 0, 1]
+    mi10 = M[i, 1, 0]
+    mi11 = M[i, 1, 1]
     for p in range(indptr[i], indptr[i + 1]):
         j = indices[p]
         wij = w[p]
         X0 = X_ij[p, 0]
         X1 = X_ij[p, 1]
-        fx += wij * ((M[i, 0, 0] + M[j, 0, 0]) * X0 + (M[i, 0, 1] + M[j, 0, 1]) * X1)
-        fy += wij * ((M[i, 1, 0] + M[j, 1, 0]) * X0 + (M[i, 1, 1] + M[j, 1, 1]) * X1)
-        if cs[i] != 0.0 or cs[j] != 0.0:
+        fx += wij * ((mi00 + M[j, 0, 0]) * X0 + (mi01 + M[j, 0, 1]) * X1)
+        fy += wij * ((mi10 + M[j, 1, 0]) * X0 + (mi11 + M[j, 1, 1]) * X1)
+        if stab and (cs[i] != 0.0 or cs[j] != 0.0):
             x0 = x[j, 0] - x[i, 0]
             x1 = x[j, 1] - x[i, 1]
             di0 = x0 - (F_all[i, 0, 0] * X0 + F_all[i, 0, 1] * X1)
@@ -190,8 +199,9 @@ def internal_force(x, indptr, indices, X_ij, w, M, F_all, cs):
     """Internal forces (N,2), N (per unit thickness): −∂(Σ V ψ + H_s)/∂x."""
     N = x.shape[0]
     f = np.empty((N, 2))
+    stab = np.any(cs != 0.0)
     for i in prange(N):
-        fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs)
+        fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
         f[i, 0] = fx
         f[i, 1] = fy
     return f
@@ -221,6 +231,7 @@ def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping,
     """``n_steps`` steps of eq. 8 (``euler``) or its kick–drift–kick form, in place. Returns the
     number of steps completed (fewer if a material point failed or a position became non-finite)."""
     N = x.shape[0]
+    stab = np.any(cs != 0.0)
     for s in range(n_steps):
         if euler:
             for i in prange(N):
@@ -234,7 +245,7 @@ def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping,
         stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_new, status)
         bad = 0
         for i in prange(N):
-            fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs)
+            fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
             acc[i, 0] = fx / m[i] + a_ext[i, 0]
             acc[i, 1] = fy / m[i] + a_ext[i, 1]
             if euler:
