@@ -144,7 +144,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if (args.verbose or args.command == "verify") else logging.WARNING,
                         format="%(asctime)s %(message)s", datefmt="%H:%M:%S")
-    logging.getLogger("skfem").setLevel(logging.WARNING)
+    for noisy in ("skfem", "distributed", "tornado", "bokeh"):  # the cluster's own chatter
+        logging.getLogger(noisy).setLevel(logging.WARNING)
     try:
         return int(args.fn(args) or 0)
     except (UsageError, ParameterError) as err:
