@@ -993,7 +993,8 @@ def solve_ss_curve(scene, resolution: int = 2, h_ratio: float = 1.3,
 def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: str = "cubic_spline",
                      lattice_mode: str = "node", method: str = "newton", tol: float = 1e-8,
                      max_cuts: int = 6, hourglass: float = 0.0, correction: str = DEFAULT_CORRECTION,
-                     fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
+                     fields=None, field_frames: int = DEFAULT_FRAMES, discretisation=None,
+                     solver_name: str = "csph") -> dict:
     """Static tip-loaded cantilever (004 E), plane strain or stress per ``scene.plane`` (plane
     stress is not modelled: ValueError). The loads of ``scene.loads`` are applied in turn; each is
     reached by Newton with the increment halved on failure (``max_cuts`` times), then by dynamic
@@ -1002,7 +1003,12 @@ def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: 
 
     ``fields`` (a folder, or None): the equilibrium of every load as one frame of the ParaView
     series ``cantilever_csph_H<resolution>.pvd`` (its "time" is the load P L²/(E I));
-    ``field_frames`` is accepted for a common interface (every load is written)."""
+    ``field_frames`` is accepted for a common interface (every load is written).
+
+    ``discretisation`` (optional): a function ``ParticleSet -> Discretisation`` replacing the
+    corrected kernel gradients — any method whose F is Σ_b (x_b − x_a) ⊗ G_ab and whose force is
+    −∂Π/∂x has this static solver; :func:`sph.hpm.solve_cantilever` passes its weighted-least-squares
+    G (004 eq. 4) with ``solver_name='hpm'``."""
     if scene.plane != "strain":
         raise ValueError(f"plane: {scene.plane!r} is not supported by csph; allowed: 'strain'")
     if method not in ("newton", "dr"):
@@ -1010,7 +1016,8 @@ def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: 
     t0 = time.perf_counter()
     mat = scene.material
     ps = lattice.cantilever(scene, resolution, mode=lattice_mode)
-    disc = discretise(ps.X, ps.V, mat.rho, ps.dx, h_ratio, kernel, correction)
+    disc = (discretise(ps.X, ps.V, mat.rho, ps.dx, h_ratio, kernel, correction)
+            if discretisation is None else discretisation(ps))
     body = Body(disc, mat, hourglass=hourglass)
     N = disc.n
     fixed = np.zeros((N, 2), bool)
@@ -1025,7 +1032,7 @@ def solve_cantilever(scene, resolution: int = 10, h_ratio: float = 1.1, kernel: 
     current = 0.0
     failed = False
     state = dict(t=0.0, x=x)
-    snap = Snapshots.open(fields, series_name(scene.name, "csph", resolution), disc.X, mat,
+    snap = Snapshots.open(fields, series_name(scene.name, solver_name, resolution), disc.X, mat,
                           lambda: dict(t=state["t"], x=state["x"], v=np.zeros_like(state["x"]),
                                        F=deformation_gradients(state["x"], disc.indptr,
                                                                disc.indices, disc.G),

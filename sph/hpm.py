@@ -504,10 +504,35 @@ def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, 
     return out
 
 
+def wls_discretisation(model: Model):
+    """The HPM body as a :class:`sph.csph.Discretisation`: eq. 4 is F_i = Σ_j (x_j − x_i) ⊗ G_ij
+    with G_ij = w_ij A_i⁻¹ X_ij (A_i symmetric), and the force of eq. 7 is −∂(Σ V ψ)/∂x — the same
+    structure as CSPH's eq. 35 and total-Lagrangian force, so CSPH's static Newton (tangent
+    K = ∂²Π/∂x∂x) solves HPM's statics unchanged. Without the stabilisation potential only."""
+    from . import csph
+
+    rows = np.repeat(np.arange(model.n), np.diff(model.indptr))
+    G = model.w[:, None] * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij)
+    GT = csph.reverse_gradients(model.indptr, model.indices, G)
+    N = model.n
+    return csph.Discretisation(model.X, model.V, model.m, model.re, "wls", model.indptr,
+                               model.indices, G, GT, np.broadcast_to(np.eye(2), (N, 2, 2)).copy(),
+                               np.ones(N, bool))
+
+
 def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_ratio: float = RE_RATIO,
                      stabilisation: float = 0.0, rtol: float = 1e-5, max_steps: int = 400000,
-                     mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
-    """Static tip-loaded cantilever (004 E) by dynamic relaxation: the HPM dynamics with
+                     mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES,
+                     method: str = "newton") -> dict:
+    """Static tip-loaded cantilever (004 E).
+
+    ``method='newton'`` (default; a static solver for a static scene): the HPM body's
+    weighted-least-squares gradients (:func:`wls_discretisation`) in the shared static solver of
+    :func:`sph.csph.solve_cantilever` (Newton with load steps on −∂Π/∂x = f_ext; the tip load a
+    uniform shear traction over the tip column in proportion to the particle volumes). It needs
+    ``stabilisation = 0`` (the stabilisation potential has no tangent there).
+
+    ``method='dr'``: dynamic relaxation, the HPM dynamics with
     mass-proportional damping c = 2 ω₁ (about critical for the first bending mode, ω₁ from the
     Euler–Bernoulli beam), each load of ``scene.loads`` applied as equal forces on the tip column
     (uniform shear traction), continued from the previous load, until the tip velocity scale
@@ -520,6 +545,24 @@ def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_rat
     """
     from workbench import analytic
 
+    if method not in ("newton", "dr"):
+        raise ValueError(f"method: {method!r} is not one of 'newton', 'dr'")
+    if method == "newton":
+        if stabilisation != 0.0:
+            raise ValueError(f"stabilisation: {stabilisation!r} is not allowed with method='newton' "
+                             "(allowed: 0; use method='dr' for the stabilised body)")
+        from . import csph
+
+        mat = scene.material
+
+        def disc(ps):
+            return wls_discretisation(build(ps.X, ps.V, mat, ps.dx, re_ratio, 0.0))
+
+        out = csph.solve_cantilever(scene, resolution, lattice_mode=mode, method="newton",
+                                    fields=fields, field_frames=field_frames,
+                                    discretisation=disc, solver_name="hpm")
+        out["method"] = "newton"
+        return out
     check_dt_factor(dt_factor)
     ps = lattice.cantilever(scene, resolution, mode=mode)
     mat = scene.material
