@@ -388,8 +388,6 @@ def _print_table(ds) -> None:
 
 def plot(ds, path):
     """Particle-steps per second against particles, log-log, one line per solver x threads."""
-    from pathlib import Path
-
     import matplotlib
 
     matplotlib.use("Agg")
@@ -412,12 +410,9 @@ def plot(ds, path):
     ax.set_title(f"plate time loop, {ds.attrs.get('cpu_model', '')}"[:70], fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    from workbench.plots import _save
+
+    return _save(fig, path)
 
 
 def _cli(argv: list[str]) -> int:
