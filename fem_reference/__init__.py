@@ -46,6 +46,9 @@ def solve(scene, resolution: int, **options) -> dict:
 
     from . import drivers
 
+    if not isinstance(scene, Plate):  # only the plate's dynamic run writes mesh fields
+        options.pop("fields", None)
+        options.pop("field_frames", None)
     if isinstance(scene, SSCurve):
         return drivers.solve_ss_curve(scene, resolution, **options)
     if isinstance(scene, Cantilever):

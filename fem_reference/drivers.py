@@ -299,8 +299,29 @@ def period_from_history(t: np.ndarray, y: np.ndarray) -> float:
     return float(2 * slope)
 
 
+def mesh_snapshots(folder, name: str, disc, n_steps: int, frames: int):
+    """``snapshot(step, t, u, v)`` for :func:`fem_reference.dynamic.newmark` writing the mesh fields
+    (vertex ``displacement`` and ``velocity``, m and m/s) as the ParaView series ``name`` (.pvd +
+    .vtu) in ``folder``: about ``frames`` frames over ``n_steps`` steps, the last step always."""
+    from workbench.fields import FieldSeries, check_frames
+
+    from .mesh import vtk_grid
+
+    every = max(1, -(-int(n_steps) // check_frames(frames)))
+    series = FieldSeries(folder, name)
+    grid = vtk_grid(disc.basis.mesh)
+    nodal = disc.basis.nodal_dofs  # (d, n_vertices): the vertex DOFs of each component
+
+    def snapshot(step, t, u, v):
+        if step % every == 0 or step == n_steps:
+            series.add(t, grid=grid, displacement=u[nodal].T, velocity=v[nodal].T)
+
+    return snapshot
+
+
 def solve_plate(scene, resolution: int = 4, dynamic: bool = True, steps_per_period: int = 100,
-                periods: float | None = None, aspect: float = 1.0, rtol: float = 1e-9) -> dict:
+                periods: float | None = None, aspect: float = 1.0, rtol: float = 1e-9,
+                fields=None, field_frames: int = 20) -> dict:
     """Modal period and (``dynamic``) a Newmark run of the plate, ``resolution`` elements across H.
 
     Returns dict(period (modal, s), omega (three lowest, rad/s), period_dynamic (s, from the
@@ -309,6 +330,9 @@ def solve_plate(scene, resolution: int = 4, dynamic: bool = True, steps_per_peri
     other than SVK), dt, wall_time (s), wall_time_modal (s), n_dof, n_elements, status,
     newton_iterations). The time step is T_modal/``steps_per_period`` (an implicit scheme: the
     scene's ``dt_factor``, a CFL factor of the explicit particle methods, does not apply).
+    ``fields`` (a folder, or None): the dynamic run writes its mesh fields (vertex displacement
+    and velocity) as the ParaView series ``plate_fem_H<resolution>.pvd``, about ``field_frames``
+    frames (:func:`mesh_snapshots`); a modal-only run writes none.
     """
     t0 = time.perf_counter()
     problem, iy = plate_problem(scene, resolution, aspect)
@@ -330,7 +354,14 @@ def solve_plate(scene, resolution: int = 4, dynamic: bool = True, steps_per_peri
             v0 = np.zeros(disc.N)
             ydofs = np.arange(1, disc.N, 2)
             v0[ydofs] = initial_velocity(scene, X[ydofs])
-            run = newmark(problem, v0, dt, n_steps, observe=lambda u: u[iy], rtol=rtol)
+            snap = None
+            if fields is not None:
+                from workbench.fields import series_name
+
+                snap = mesh_snapshots(fields, series_name(scene.name, "fem", resolution), disc,
+                                      n_steps, field_frames)
+            run = newmark(problem, v0, dt, n_steps, observe=lambda u: u[iy], rtol=rtol,
+                          snapshot=snap)
             out.update(time=run["time"], tip_displacement=run["observed"],
                        kinetic_energy=run["kinetic_energy"], strain_energy=run["strain_energy"],
                        dt=dt, status=run["status"], newton_iterations=run["newton_iterations"])

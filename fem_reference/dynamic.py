@@ -17,10 +17,12 @@ from .static import Problem, TangentSolver, commit, newton
 
 
 def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
-            rtol: float = 1e-10, maxit: int = 20):
+            rtol: float = 1e-10, maxit: int = 20, snapshot=None):
     """Advance from rest at u = 0 with initial velocity v0 (N,) for ``n_steps`` steps of ``dt``.
 
-    ``observe(u)`` returns the scalar recorded each step (e.g. a tip displacement).
+    ``observe(u)`` returns the scalar recorded each step (e.g. a tip displacement);
+    ``snapshot(step, t, u, v)`` (optional) is called at the start and after every step (field
+    output; it decides which steps it writes).
     Returns dict(time, observed, kinetic_energy, strain_energy, status, newton_iterations).
     """
     disc = problem.disc
@@ -47,6 +49,8 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     iters = []
     status = "ok"
     solver = TangentSolver()
+    if snapshot is not None:
+        snapshot(0, 0.0, u, v)
     for n in range(n_steps):
         # a_{n+1}(u) = c (u − u_n − Δt v_n) − a_n; residual f_int(u) + M a_{n+1}(u)
         base = u + dt * v
@@ -69,5 +73,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         obs.append(observe(u))
         ke.append(0.5 * v @ (M_full @ v))
         se.append(energy(state))
+        if snapshot is not None:
+            snapshot(n + 1, t[-1], u, v)
     return dict(time=np.array(t), observed=np.array(obs), kinetic_energy=np.array(ke),
                 strain_energy=np.array(se), status=status, newton_iterations=iters)

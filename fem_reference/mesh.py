@@ -42,3 +42,18 @@ def element_for(mesh) -> tuple[skfem.Element, int]:
     if isinstance(mesh, skfem.MeshHex):
         return skfem.ElementHex1(), 2  # 2×2×2 Gauss points
     raise ValueError(f"mesh: {type(mesh).__name__} is not supported (MeshQuad or MeshHex)")
+
+
+def vtk_grid(mesh):
+    """The mesh's vertices and corner connectivity as a pyvista ``UnstructuredGrid`` (VTK_QUAD in
+    2-D, VTK_HEXAHEDRON in 3-D; z = 0 in 2-D) for field output — the vertex values of a Lagrange
+    field are its nodal values there (the mid-side and centre nodes of Q9 are not drawn)."""
+    import pyvista as pv
+
+    pts = np.asarray(mesh.p.T, dtype=float)
+    if pts.shape[1] == 2:
+        pts = np.column_stack([pts, np.zeros(len(pts))])
+    corners = np.asarray(mesh.t[: (4 if mesh.dim() == 2 else 8)].T, dtype=np.int64)
+    kind = pv.CellType.QUAD if mesh.dim() == 2 else pv.CellType.HEXAHEDRON
+    cells = np.column_stack([np.full(len(corners), corners.shape[1]), corners]).ravel()
+    return pv.UnstructuredGrid(cells, np.full(len(corners), kind, dtype=np.uint8), pts)

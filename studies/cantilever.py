@@ -48,7 +48,7 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
         scheduler: str | None = None, fields=None, field_runs=None) -> xr.Dataset:
     """``fields`` (a folder, or None): the particle runs write their fields there as ParaView
     series (``field_runs``: the (solver, resolution) pairs that do; None: all); the names of the
-    written series are the dataset's ``field_series`` attribute. The FEM writes none."""
+    written series are the dataset's ``field_series`` attribute. The FEM writes none here (static cantilever)."""
     scene = scene or Cantilever()
     solvers = list(solvers or SOLVERS)
     for s in solvers:

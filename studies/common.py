@@ -128,9 +128,9 @@ def ladder(solver: str, resolutions, study, quick: bool) -> list[int]:
     return check_resolutions(resolutions)
 
 
-FIELD_SOLVERS = ("csph", "hpm", "sph")
-"""The solvers that write particle fields (``fields=<folder>``); the FEM reference returns only the
-tip history, so it has no fields to write."""
+FIELD_SOLVERS = ("fem", "csph", "hpm", "sph")
+"""The solvers that write fields (``fields=<folder>``): the particle methods their particles, the
+FEM its mesh (the plate's dynamic run only)."""
 
 
 def field_options(solver: str, resolution: int, fields, field_runs=None) -> dict:
