@@ -114,6 +114,12 @@ class NewtonResult:
     solve_time: float = 0.0
     reason: str = ""
 
+    def quadratic_constants(self, start: float = 0.2, floor: float = 1e-10) -> list[float]:
+        """C_k = r_{k+1} / r_k² over the iterates in the asymptotic range (r_k < ``start``) and
+        above the round-off ``floor``: bounded C is quadratic convergence (a consistent tangent)."""
+        r = self.residuals
+        return [b / a ** 2 for a, b in zip(r[:-1], r[1:]) if a < start and b > floor]
+
 
 def linear_solve(K, b):
     """Sparse direct solve of K x = b (SuperLU, minimum-degree ordering on AᵀA+A, which suits the

@@ -52,9 +52,8 @@ def test_newton_converges_quadratically():
     assert res.converged, res.reason
     r = np.array(res.residuals)
     assert r[-1] < 1e-9
-    pairs = [(a, b) for a, b in zip(r[:-1], r[1:]) if a < 0.2 and b > 1e-10]
-    assert len(pairs) >= 2, f"too few iterates in the asymptotic range: {r}"
-    C = [b / a ** 2 for a, b in pairs]
+    C = res.quadratic_constants(start=0.2, floor=1e-10)
+    assert len(C) >= 2, f"too few iterates in the asymptotic range: {r}"
     assert max(C) < 10, f"r_(k+1)/r_k^2 = {C} from residuals {r}"
 
 
