@@ -443,7 +443,8 @@ class Body:
         """Stress of the last evaluation, (N, 3, 3): 'P', 'tau' or 'sigma' (Cauchy), Pa."""
         from workbench.materials.kernels import material_points
 
-        P, _, _ = material_points(np.ascontiguousarray(self.F), self.history, self.prm)
+        P, _, _ = material_points(np.ascontiguousarray(self.F), self.history, self.prm[None],
+                                  np.zeros(self.disc.n, np.int64))
         if kind == "P":
             return P
         tau = np.einsum("nij,nkj->nik", P, self.F)

@@ -36,7 +36,7 @@ def stress(mat, F, h=None):
         h = mat.initial_history(len(F))
     # a writeable copy: a read-only array is another numba type, i.e. another compilation
     h = np.array(np.broadcast_to(np.asarray(h, dtype=float), (len(F), mat.n_history)))
-    return kernels.material_points(F, h, mat.params())
+    return kernels.material_points(F, h, mat.params()[None], np.zeros(len(F), np.int64))
 
 
 def tangent(mat, F, h=None):
@@ -44,7 +44,7 @@ def tangent(mat, F, h=None):
     if h is None:
         h = mat.initial_history(1)
     h = np.ascontiguousarray(np.asarray(h, dtype=float).reshape(1, mat.n_history))
-    P, A, hn, st = kernels.material_points_tangent(F, h, mat.params())
+    P, A, hn, st = kernels.material_points_tangent(F, h, mat.params()[None], np.zeros(1, np.int64))
     assert st[0] == 0
     return A[0]
 
@@ -363,7 +363,7 @@ def test_batch_point_and_evaluate_agree(name):
     F[-1] = np.eye(3) + 0.05 * np.random.default_rng(30).standard_normal((3, 3))
     h = mat.initial_history(N)
     P, hn, st = stress(mat, F, h)
-    Pt, A, ht, stt = kernels.material_points_tangent(F, h, mat.params())
+    Pt, A, ht, stt = kernels.material_points_tangent(F, h, mat.params()[None], np.zeros(N, np.int64))
     assert np.array_equal(P, Pt) and np.array_equal(hn, ht) and np.array_equal(st, stt)
     prm = mat.params()
     for n in range(N):  # the one-point entry used by other numba code
@@ -378,3 +378,21 @@ def test_batch_point_and_evaluate_agree(name):
     assert r["A"].shape == (N, 3, 3, 3, 3) and r["history"].shape == (N, mat.n_history)
     r1 = evaluate(mat, F[0], stress="sigma")
     assert rel(r1["stress"], P[0] @ F[0].T / np.linalg.det(F[0])) < TOL_ROUND
+
+
+def test_material_table_rows_match_each_material_alone():
+    """A body of several materials (a region index per point into the parameter table) gives each
+    point exactly the stress of its own material evaluated alone, history columns included."""
+    from workbench.materials import MaterialTable, evaluate
+
+    table = MaterialTable((SVK, J2, NEO))
+    rng = np.random.default_rng(7)
+    mat_id = rng.integers(0, 3, 12)
+    F = np.stack([random_F(40 + n, 5e-4 if mat_id[n] == 1 else 0.1) for n in range(12)])
+    r = evaluate(table, F, mat_id=mat_id, tangent=True)
+    assert r["history"].shape == (12, J2.n_history)
+    for n in range(12):
+        alone = evaluate(table[mat_id[n]], F[n], tangent=True)
+        assert np.array_equal(r["stress"][n], alone["stress"])
+        assert np.array_equal(r["A"][n], alone["A"])
+    assert np.all(r["history"][mat_id != 1] == 0.0)  # elastic points keep their (unused) columns

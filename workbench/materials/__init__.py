@@ -188,6 +188,73 @@ class Material:
         return d
 
 
+@dataclass(frozen=True)
+class MaterialTable:
+    """The materials of one body, indexed by a material id per particle or element (a region's
+    material, a grain, mortar and steel): the numba loops read row ``mat_id[a]`` of
+    :meth:`params`, so one compiled kernel serves bodies of any number of materials.
+
+    ``n_history`` is the widest law's; every point carries that many history columns (an elastic
+    point keeps its columns untouched)."""
+
+    materials: tuple
+
+    def __post_init__(self):
+        mats = tuple(self.materials)
+        if not mats:
+            raise ValueError("materials: a table needs at least one material")
+        for m in mats:
+            if not isinstance(m, Material):
+                raise ValueError(f"materials: {m!r} is not a Material")
+        object.__setattr__(self, "materials", mats)
+
+    @classmethod
+    def of(cls, material) -> "MaterialTable":
+        """A table of one material (or the table itself)."""
+        return material if isinstance(material, MaterialTable) else cls((material,))
+
+    def __len__(self) -> int:
+        return len(self.materials)
+
+    def __getitem__(self, i) -> Material:
+        return self.materials[i]
+
+    def params(self) -> np.ndarray:
+        """(n_materials, N_PARAMS) float64, row k = ``materials[k].params()``."""
+        return np.ascontiguousarray(np.stack([m.params() for m in self.materials]))
+
+    @property
+    def n_history(self) -> int:
+        return max(m.n_history for m in self.materials)
+
+    def initial_history(self, mat_id) -> np.ndarray:
+        """History of virgin points with materials ``mat_id`` (N,): (N, n_history)."""
+        mat_id = np.asarray(mat_id, dtype=np.int64)
+        h = np.zeros((mat_id.size, self.n_history))
+        for k, m in enumerate(self.materials):
+            sel = mat_id == k
+            if m.n_history and sel.any():
+                h[sel, : m.n_history] = m.initial_history(int(sel.sum()))
+        return h
+
+    def rho(self, mat_id) -> np.ndarray:
+        """Density of each point, kg/m³."""
+        return np.array([m.rho for m in self.materials])[np.asarray(mat_id, dtype=np.int64)]
+
+    def wave_speed(self, plane: str | None = "strain") -> float:
+        """Fastest small-strain elastic wave speed over the materials, m/s."""
+        return max(m.wave_speed(plane) for m in self.materials)
+
+    @property
+    def mu(self) -> float:
+        """Largest small-strain shear modulus of the table, Pa."""
+        return max(m.mu for m in self.materials)
+
+    @property
+    def all_svk(self) -> bool:
+        return all(m.law == "svk" for m in self.materials)
+
+
 # Materials of the papers (scenes.md).
 TABLE1_STEEL = Material.j2(E=202e9, nu=0.3, C=868.8e6, eps0=0.0013, n=0.179, rho=7974.0)
 RUBBER = Material.from_bulk_shear("svk", K=3.25e6, G=7.15e5, rho=1000.0)
@@ -195,30 +262,34 @@ RING_RUBBER = Material.mooney_rivlin(c1=1.265e5, c2=1.012e4, lam=1.012e7, rho=12
 BEAM = Material.svk(E=1.0e5, nu=0.3, rho=1000.0)
 
 
-def evaluate(material: Material, F: np.ndarray, history: np.ndarray | None = None,
-             tangent: bool = False, stress: str = "P"):
+def evaluate(material, F: np.ndarray, history: np.ndarray | None = None,
+             tangent: bool = False, stress: str = "P", mat_id=None):
     """Stress at many points.
 
-    F: (N, 3, 3) or (3, 3). history: (N, n_history) or None (virgin). Returns a dict with
-    ``stress`` ((N,3,3): 'P' first Piola–Kirchhoff, 'tau' Kirchhoff, 'sigma' Cauchy), ``history``
-    (N, n_history), ``status`` (N,) int (0 ok; see kernels) and, with ``tangent``, ``A`` = dP/dF of
-    shape (N, 3, 3, 3, 3), A[i, j, k, l] = ∂P_ij/∂F_kl.
+    material: a :class:`Material` or a :class:`MaterialTable` (then ``mat_id`` (N,) gives each
+    point's row; default all 0). F: (N, 3, 3) or (3, 3). history: (N, n_history) or None
+    (virgin). Returns a dict with ``stress`` ((N,3,3): 'P' first Piola–Kirchhoff, 'tau' Kirchhoff,
+    'sigma' Cauchy), ``history`` (N, n_history), ``status`` (N,) int (0 ok; see kernels) and, with
+    ``tangent``, ``A`` = dP/dF of shape (N, 3, 3, 3, 3), A[i, j, k, l] = ∂P_ij/∂F_kl.
     """
     from . import kernels
 
+    table = MaterialTable.of(material)
     F = np.asarray(F, dtype=np.float64)
     single = F.ndim == 2
     F = np.ascontiguousarray(F.reshape(-1, 3, 3))
+    mat_id = (np.zeros(F.shape[0], np.int64) if mat_id is None
+              else np.ascontiguousarray(np.broadcast_to(mat_id, F.shape[:1]), dtype=np.int64))
     if history is None:
-        history = material.initial_history(F.shape[0])
+        history = table.initial_history(mat_id)
     history = np.ascontiguousarray(np.asarray(history, dtype=np.float64).reshape(F.shape[0], -1))
-    if history.shape[1] != material.n_history:
-        raise ValueError(f"history: expected {material.n_history} columns, got {history.shape[1]}")
-    prm = material.params()
+    if history.shape[1] != table.n_history:
+        raise ValueError(f"history: expected {table.n_history} columns, got {history.shape[1]}")
+    prm = table.params()
     if tangent:
-        P, A, h, status = kernels.material_points_tangent(F, history, prm)
+        P, A, h, status = kernels.material_points_tangent(F, history, prm, mat_id)
     else:
-        P, h, status = kernels.material_points(F, history, prm)
+        P, h, status = kernels.material_points(F, history, prm, mat_id)
         A = None
     if stress == "P":
         out = P

@@ -538,62 +538,75 @@ def material_point(F, h_old, prm, P, h_new, A, want_tangent):
 
 
 @njit(**JIT)
-def _check(F, h_old, prm):
-    law = int(prm[0])
-    if law < 0 or law > 3:
-        raise ValueError("prm[0]: unknown material law code")
+def _check(F, h_old, prm, mat_id):
+    """Shapes and codes of a batch: F (N, 3, 3), h_old (N, n_history), prm (n_mat, N_PARAMS),
+    mat_id (N,) indices into prm; n_history must hold the widest law of the table (the elastic
+    laws ignore and keep any history columns)."""
+    for r in range(prm.shape[0]):
+        law = int(prm[r, 0])
+        if law < 0 or law > 3:
+            raise ValueError("prm[:, 0]: unknown material law code")
+        if law == 3 and h_old.shape[1] < 11:
+            raise ValueError("h_old: J2 needs 11 history columns")
     if F.shape[1] != 3 or F.shape[2] != 3 or h_old.shape[0] != F.shape[0]:
         raise ValueError("F must be (N, 3, 3) and h_old (N, n_history)")
-    if law == 3 and h_old.shape[1] != 11:
-        raise ValueError("h_old: J2 needs 11 history columns")
-    if law != 3 and h_old.shape[1] != 0:
-        raise ValueError("h_old: the elastic laws have no history (0 columns)")
+    if mat_id.shape[0] != F.shape[0]:
+        raise ValueError("mat_id must be (N,)")
+    for n in range(mat_id.shape[0]):
+        if mat_id[n] < 0 or mat_id[n] >= prm.shape[0]:
+            raise ValueError("mat_id: a material index outside the parameter table")
 
 
 @njit(**JIT_PARALLEL)
-def _points_into(F, h_old, prm, P, h_new, A, status, want_tangent):
+def _points_into(F, h_old, prm, mat_id, P, h_new, A, status, want_tangent):
     """The parallel loop behind :func:`material_points` and :func:`material_points_tangent`
-    (one parallel kernel for both keeps the first compilation short). The law is dispatched per
-    point by a branch the CPU predicts; the law kernels are called directly rather than through
-    :func:`material_point`, whose non-inlined call halves the speed of the elastic laws. Without
-    ``want_tangent``, A is a (1, 3, 3, 3, 3) dummy that is never written."""
-    law = int(prm[0])
+    (one parallel kernel for both keeps the first compilation short). Point n takes the
+    parameter row ``prm[mat_id[n]]``. The law is dispatched per point by a branch the CPU
+    predicts; the law kernels are called directly rather than through :func:`material_point`,
+    whose non-inlined call halves the speed of the elastic laws. Without ``want_tangent``, A is a
+    (1, 3, 3, 3, 3) dummy that is never written."""
     for n in prange(F.shape[0]):
         m = n if want_tangent else n - n  # (n - n: the parfor index type, not int64)
+        row = prm[mat_id[n]]
+        law = int(row[0])
+        if law != 3:
+            _copy(h_old[n], h_new[n])
         if law == 0:
-            status[n] = svk_point(F[n], prm, P[n], A[m], want_tangent)
+            status[n] = svk_point(F[n], row, P[n], A[m], want_tangent)
         elif law == 1:
-            status[n] = neo_hooke_point(F[n], prm, P[n], A[m], want_tangent)
+            status[n] = neo_hooke_point(F[n], row, P[n], A[m], want_tangent)
         elif law == 2:
-            status[n] = mooney_rivlin_point(F[n], prm, P[n], A[m], want_tangent)
+            status[n] = mooney_rivlin_point(F[n], row, P[n], A[m], want_tangent)
         else:
-            status[n] = j2_point(F[n], h_old[n], prm, P[n], h_new[n], A[m], want_tangent)
+            status[n] = j2_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
 
 
 @njit(**JIT)
-def material_points(F, h_old, prm):
-    """Stress at N points, in parallel: F (N, 3, 3), h_old (N, n_history), prm (10,) →
-    P (N, 3, 3), h_new (N, n_history), status (N,) int64."""
-    _check(F, h_old, prm)
+def material_points(F, h_old, prm, mat_id):
+    """Stress at N points, in parallel: F (N, 3, 3), h_old (N, n_history), prm (n_mat, N_PARAMS)
+    parameter table (:meth:`workbench.materials.MaterialTable.params`), mat_id (N,) int64 rows
+    of it → P (N, 3, 3), h_new (N, n_history), status (N,) int64."""
+    _check(F, h_old, prm, mat_id)
     N = F.shape[0]
     P = np.empty((N, 3, 3))
     h_new = np.empty((N, h_old.shape[1]))
     status = np.empty(N, dtype=np.int64)
     # bool(...): a plain bool, not Literal[bool], so that the law kernels compile once for all
     # callers (a literal would give them a specialisation of their own)
-    _points_into(F, h_old, prm, P, h_new, np.empty((1, 3, 3, 3, 3)), status, bool(False))
+    _points_into(F, h_old, prm, mat_id, P, h_new, np.empty((1, 3, 3, 3, 3)), status, bool(False))
     return P, h_new, status
 
 
 @njit(**JIT)
-def material_points_tangent(F, h_old, prm):
-    """Stress and tangent at N points, in parallel: → P (N, 3, 3), A (N, 3, 3, 3, 3) with
-    A[n, i, j, k, l] = ∂P_ij/∂F_kl, h_new (N, n_history), status (N,) int64."""
-    _check(F, h_old, prm)
+def material_points_tangent(F, h_old, prm, mat_id):
+    """Stress and tangent at N points, in parallel (arguments as :func:`material_points`):
+    → P (N, 3, 3), A (N, 3, 3, 3, 3) with A[n, i, j, k, l] = ∂P_ij/∂F_kl, h_new (N, n_history),
+    status (N,) int64."""
+    _check(F, h_old, prm, mat_id)
     N = F.shape[0]
     P = np.empty((N, 3, 3))
     A = np.empty((N, 3, 3, 3, 3))
     h_new = np.empty((N, h_old.shape[1]))
     status = np.empty(N, dtype=np.int64)
-    _points_into(F, h_old, prm, P, h_new, A, status, bool(True))  # plain bool, see above
+    _points_into(F, h_old, prm, mat_id, P, h_new, A, status, bool(True))  # plain bool, see above
     return P, A, h_new, status
