@@ -1,43 +1,28 @@
 """Particle methods of the workbench: the shared particle core (kernels, neighbour search,
-lattices, time integration, diagnostics) and one module per method (``csph``, …).
+particles from scene models, time integration, diagnostics, the driver) and one module per method.
 
-numba's on-disk cache (``cache=True``) keys each compiled function on its own source file only: a
-function that calls code from another file (the material library, or a row routine of this
-package) keeps the old callee after that file changes. :func:`_guard_numba_cache` therefore drops
-this package's cached machine code whenever any of its sources or the material kernels change.
+:data:`METHODS` is the registry: a method is a module with ``NAME``, ``OPTIONS`` and
+``build(particles, **options)`` returning a :class:`sph.method.ParticleBody`; adding one is a
+module and a line here.
+
+numba's on-disk cache keys each compiled function on its own source file only; the package drops
+its cached machine code whenever any of its sources or the material library's change
+(:func:`workbench.jitcache.guard`).
 """
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
+from workbench import jitcache as _jitcache
+from workbench import materials as _materials
 
-def _guard_numba_cache() -> None:
-    here = Path(__file__).parent
-    sources = sorted(here.glob("*.py"))
-    try:
-        import workbench.materials as _m
+_here = Path(__file__).parent
+_jitcache.guard(_here / "__pycache__",
+                _jitcache.sources_of(_here, Path(_materials.__file__).parent))
 
-        sources.append(Path(_m.__file__).parent / "kernels.py")
-    except Exception:  # pragma: no cover - material library missing: nothing to guard
-        return
-    h = hashlib.sha1()
-    for p in sources:
-        if p.exists():
-            h.update(p.name.encode())
-            h.update(p.read_bytes())
-    digest = h.hexdigest()
-    cache = here / "__pycache__"
-    stamp = cache / "numba_sources.sha1"
-    try:
-        if stamp.exists() and stamp.read_text().strip() == digest:
-            return
-        cache.mkdir(exist_ok=True)
-        for f in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
-            f.unlink(missing_ok=True)
-        stamp.write_text(digest)
-    except OSError:  # read-only install: numba falls back to compiling in memory
-        pass
-
-
-_guard_numba_cache()
+METHODS = {
+    "csph": "sph.csph",
+    "hpm": "sph.hpm",
+    "sph": "sph.classic",
+}
+"""Particle method name (the ``solver`` of the datasets) -> module."""

@@ -28,19 +28,15 @@ is conserved to round-off.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 from numba import njit, prange
 
-from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
 from workbench.materials.kernels import material_point
 
-from . import lattice
-from .diagnostics import probe_displacement
-from .integrate import (cfl_time_step, check_dt_factor, kick_drift, kick_row, monitor_chunk,
-                        run_monitored)
+from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
+from .method import ParticleBody
 from .neighbours import drop_cross_body, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
@@ -329,87 +325,67 @@ class Body:
         return cfl_time_step(self.dx, self.c0, dt_factor)
 
 
-def solve(scene, resolution: int, **options) -> dict:
-    """Run classic SPH on ``scene`` (Plate, Cantilever or a stability scene)."""
-    from workbench.scenes import Cantilever, Plate
-
-    if isinstance(scene, Plate):
-        return solve_plate(scene, resolution, **options)
-    if isinstance(scene, Cantilever):
-        return solve_cantilever(scene, resolution, **options)
-    from . import stability
-
-    if stability.is_stability_scene(scene):
-        return stability.solve("sph", scene, resolution, **options)
-    raise ValueError(f"scene: {type(scene).__name__} has no classic-SPH driver")
+NAME = "sph"
+OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 'hyperelastic'",
+               alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
+               artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)")
 
 
-def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None, h_ratio: float = 1.3,
-                alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
-                stress: str = "hypoelastic", n_out: int = 400, periods: float | None = None,
-                energy_growth: float = 0.5, fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
-    """The oscillating plate (004 D) with classic SPH; keys as :func:`sph.hpm.solve_plate`.
-    The clamp block's particles are fixed; the tip is the probe ``tip_mid`` of the cell lattice.
-    The artificial viscosity dissipates energy: recorded as ``dissipated`` (status 'ok' with a
-    ``note``), not as instability; the period is read from the tip history whenever it has two or
-    more zero crossings. ``fields`` (a folder, or None): particle fields (the carried Cauchy
-    stress) as the ParaView series ``plate_sph_H<resolution>.pvd``, about ``field_frames`` frames."""
-    from workbench import analytic
+class Classic(ParticleBody):
+    """A classic-SPH body built from :class:`sph.particles.Particles` (2-D, one material)."""
 
-    dt_factor = scene.dt_factor if dt_factor is None else dt_factor
-    check_dt_factor(dt_factor)
-    ps = lattice.plate(scene, resolution, mode="cell")
-    fixed = np.zeros((ps.n, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    v0 = np.zeros_like(ps.X)
-    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
-    v0[ps.sets["fixed"]] = 0.0
-    body = Body(ps.X, ps.V, scene.material, ps.dx, h_ratio, stress, alpha, beta, artificial_stress,
-                fixed=fixed, v0=v0)
-    dt = body.time_step(dt_factor)
-    t_end = (scene.periods if periods is None else periods) * analytic.plate_period(scene)
-    n_steps = int(math.ceil(t_end / dt))
-    snap = Snapshots.open(fields, series_name(scene.name, "sph", resolution), ps.X, scene.material,
-                          lambda: dict(t=body.t, x=body.x, v=body.v, sigma=body.sigma,
-                                       history=body.hist),
-                          n_steps, monitor_chunk(n_steps, n_out), field_frames)
-    out = run_monitored(lambda k: body.step(dt, k), body.energies,
-                        lambda: probe_displacement(ps, "tip_mid", body.x)[1],
-                        lambda: body.status.any(), body, n_steps, n_out,
-                        energy_growth, snapshot=snap)
-    wall = out["wall_time"]
-    out.update(dt=dt, steps=int(body.steps), n_particles=int(body.n),
-               particle_steps_per_second=body.n * body.steps / wall if wall > 0 else float("nan"))
-    return out
+    name = NAME
+
+    def __init__(self, particles, h_ratio: float = 1.3, stress: str = "hypoelastic",
+                 alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
+                 n_as: int = 4):
+        super().__init__(particles)
+        ps = particles
+        if ps.dim != 2 or ps.plane == "stress":
+            raise ValueError("sph: plane strain (2-D) only in this version; the model is "
+                             f"{ps.dim}-D{' plane stress' if ps.plane == 'stress' else ''}")
+        if len(ps.table) != 1:
+            raise ValueError(f"sph: one material per body in this version (the model has {len(ps.table)})")
+        self.b = Body(ps.X, ps.V, ps.table[0], ps.dx, h_ratio, stress, alpha, beta,
+                      artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None)
+        self.m = self.b.m
+        self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
+
+    def _set_loads(self, f_ext, fixed=None, v_fix=None, extra=None):
+        b = self.b
+        b.a_ext = f_ext / self.m[:, None]
+        if fixed is not None:
+            b.fixed[:] = fixed
+            b.v_fix[:] = v_fix
+        b.extra_force = None if extra is None else (lambda bb: extra(bb.x))
+
+    def start(self, v0, f_ext, extra=None) -> None:
+        self.v[:] = v0
+        self._set_loads(f_ext, extra=extra)
+        self.b._accelerations(0.0, kick=False)
+
+    def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
+        if damping:
+            raise ValueError("damping: classic SPH dissipates through its artificial viscosity; "
+                             "mass damping is not supported (allowed: 0)")
+        self._set_loads(f_ext, fixed, v_fix, extra)
+        done = self.b.step(dt, n)
+        self.t, self.steps = self.b.t, self.b.steps
+        self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
+        return done
+
+    def energies(self) -> tuple[float, float]:
+        return self.b.energies()
+
+    def failed(self) -> bool:
+        return bool(self.b.status.any())
+
+    def field_state(self) -> dict:
+        b = self.b
+        return dict(t=b.t, x=b.x, v=b.v, sigma=b.sigma, history=b.hist, J=b.rho0 / b.rho,
+                    mat_id=self.particles.mat_id, region=self.particles.region)
 
 
-def solve_cantilever(scene, resolution: int = 10, **options) -> dict:
-    """Not implemented for classic SPH (a static problem; the baseline is dynamic only)."""
-    raise NotImplementedError("classic SPH has no static cantilever driver (use hpm or csph)")
-
-
-def bench(n_particles: int = 100_000, threads: int = 1, steps: int = 20) -> dict:
-    """Particle-steps per second of classic SPH's step (neighbour rebuild included) on the plate at
-    about ``n_particles`` particles, ``threads`` numba threads, after a warm-up step."""
-    import numba
-
-    from workbench import analytic
-    from workbench.scenes import Plate
-
-    from .bench import plate_resolution
-
-    numba.set_num_threads(threads)
-    scene = Plate()
-    ps = lattice.plate(scene, plate_resolution(n_particles), mode="cell")
-    fixed = np.zeros((ps.n, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    v0 = np.zeros_like(ps.X)
-    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
-    body = Body(ps.X, ps.V, scene.material, ps.dx, fixed=fixed, v0=v0)
-    dt = body.time_step(scene.dt_factor)
-    body.step(dt, 1)
-    t0 = time.perf_counter()
-    done = body.step(dt, steps)
-    loop = time.perf_counter() - t0
-    return dict(particle_steps_per_second=body.n * done / loop, n_particles=body.n, steps=done,
-                loop_time=loop, threads=threads)
+def build(particles, **options) -> Classic:
+    """A classic-SPH body of ``particles``; options: ``OPTIONS``."""
+    return Classic(particles, **options)

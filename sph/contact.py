@@ -2,7 +2,8 @@
 (the "repulsive particle" contact of Monaghan 1994 / Gray et al. 2001 in its simplest, linear form).
 
 Two particles a, b of different bodies closer than the contact distance r_c interact through the
-potential Φ_ab = ½ k (r_c − r_ab)² (k in Pa = N/m per unit thickness per metre of overlap), i.e. the
+potential Φ_ab = ½ k (r_c − r_ab)² (2-D: k in Pa = N/m per unit thickness per metre of overlap;
+3-D: k r_c in N/m), i.e. the
 repulsive force f_a = k (r_c − r_ab) (x_a − x_b)/r_ab = −f_b. The pair force is equal and opposite
 and central, so linear and angular momentum are conserved exactly, and the contact is conservative
 (its energy Φ is part of the Hamiltonian). Pairs are found with the shared cell list
@@ -21,31 +22,35 @@ from .neighbours import neighbour_list
 
 @njit(parallel=True, **JIT)
 def _contact(x, body, indptr, indices, rc, k):
-    N = x.shape[0]
-    f = np.zeros((N, 2))
+    N, d = x.shape
+    f = np.zeros((N, d))
     e = np.zeros(N)
     for a in prange(N):
         for p in range(indptr[a], indptr[a + 1]):
             b = indices[p]
             if body[b] == body[a]:
                 continue
-            d0 = x[a, 0] - x[b, 0]
-            d1 = x[a, 1] - x[b, 1]
-            r = math.sqrt(d0 * d0 + d1 * d1)
+            r2 = 0.0
+            for i in range(d):
+                r2 += (x[a, i] - x[b, i]) ** 2
+            r = math.sqrt(r2)
             if r >= rc or r <= 0.0:
                 continue
             s = k * (rc - r) / r
-            f[a, 0] += s * d0
-            f[a, 1] += s * d1
+            for i in range(d):
+                f[a, i] += s * (x[a, i] - x[b, i])
             e[a] += 0.25 * k * (rc - r) * (rc - r)  # half of Φ_ab: each pair is visited twice
     return f, e.sum()
 
 
 def contact_forces(x: np.ndarray, body: np.ndarray, rc: float, k: float):
-    """Contact forces (N,2), N per unit thickness, and the contact energy Σ Φ, J per unit thickness.
-    ``body`` (N,) int labels; ``rc`` contact distance (m); ``k`` penalty stiffness (Pa)."""
+    """Contact forces (N, d), N (N/m in 2-D), and the contact energy Σ Φ, J (J/m in 2-D), in 2-D
+    or 3-D. ``body`` (N,) int labels; ``rc`` contact distance (m); ``k`` penalty stiffness (Pa: N/m
+    per unit thickness per metre of overlap in 2-D; in 3-D the force per metre of overlap is k·rc,
+    the stiffness of a particle of section ~rc²/rc)."""
     if not rc > 0 or not k >= 0:
         raise ValueError(f"rc, k: must be > 0 and >= 0 (got {rc}, {k})")
     x = np.ascontiguousarray(x, dtype=np.float64)
     indptr, indices = neighbour_list(x, rc)
-    return _contact(x, np.ascontiguousarray(body, dtype=np.int64), indptr, indices, rc, k)
+    kk = k if x.shape[1] == 2 else k * rc
+    return _contact(x, np.ascontiguousarray(body, dtype=np.int64), indptr, indices, rc, kk)

@@ -38,7 +38,7 @@ the shared :mod:`sph.integrate` (``scheme="verlet"``, default) so that velocitie
 reported energies — are synchronous with positions; ``scheme="euler"`` runs eq. 8 literally.
 
 :func:`solve` dispatches on the scene (Plate, Cantilever, and the stability scenes of
-:mod:`workbench.stability_scenes`).
+:mod:`workbench.scenes.stability`).
 """
 from __future__ import annotations
 
@@ -49,14 +49,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
 from workbench.materials.kernels import material_point, svk_point
 
-from . import lattice
-from .diagnostics import probe_displacement, strain_energy
-from .integrate import (cfl_time_step, check_dt_factor, kick_drift_row, kick_row, monitor_chunk,
-                        run_monitored)
+from .diagnostics import strain_energy
+from .integrate import cfl_time_step, kick_drift_row, kick_row
 from .kernels import JIT, N_CHUNKS
+from .method import ParticleBody
 from .neighbours import drop_cross_body, neighbour_list
 
 RE_RATIO = 2.1
@@ -294,7 +292,7 @@ class Model:
         return self.X.shape[0]
 
 
-def build(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
+def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
           body=None) -> Model:
     """Reference configuration of an HPM body (eq. 5–6). ``body`` (N,) int, optional: particles
     of different bodies never interact through the weights (separate bodies, e.g. two rings)."""
@@ -417,230 +415,94 @@ def time_step(model: Model, dt_factor: float) -> float:
 
 
 # ================================================================================================
-# Scenes
+# The method's body for the driver
 # ================================================================================================
 
-def solve(scene, resolution: int, **options) -> dict:
-    """Run HPM on ``scene`` at ``resolution`` (particles across the thickness H, or the scene's own
-    resolution measure). See :func:`solve_plate`, :func:`solve_cantilever` and
-    :mod:`sph.stability` for the keys."""
-    from workbench.scenes import Cantilever, Plate
-
-    if isinstance(scene, Plate):
-        return solve_plate(scene, resolution, **options)
-    if isinstance(scene, Cantilever):
-        return solve_cantilever(scene, resolution, **options)
-    from . import stability
-
-    if stability.is_stability_scene(scene):
-        return stability.solve("hpm", scene, resolution, **options)
-    raise ValueError(f"scene: {type(scene).__name__} has no HPM driver")
-
-
-def solve_plate(scene, resolution: int = 10, dt_factor: float | None = None,
-                re_ratio: float = RE_RATIO, stabilisation: float = 0.0, scheme: str = "verlet",
-                n_out: int = 400, periods: float | None = None, energy_growth: float = 0.5,
-                mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES) -> dict:
-    """The oscillating plate (004 D): particles of :func:`sph.lattice.plate`, the clamp block fixed,
-    initial velocity of eq. 13 (Gray et al.'s mode shape).
-
-    ``mode="node"`` (default) puts particles on the free surfaces with trapezoid volumes. The WLS
-    gradient (eq. 4) is only first-order accurate at a free surface (the one-sided stencil sees the
-    bending strain of a point about r_e/3 inside); on the ``cell`` lattice the outermost particles
-    sit Δx/2 inside the surface and the pure-bending energy at H/Δx = 10, r_e = 2.1Δx is 7 % low
-    (period +6 %), on the node lattice 1.4 % low (measured, tests/test_hpm.py).
-
-    Returns dict(period (s, zero crossings of the tip history), amplitude (m, max |tip
-    displacement|), time, tip_displacement (m, +Y, probe ``tip_mid``), kinetic_energy,
-    strain_energy (J per unit thickness, incl. the stabilisation potential), energy_drift
-    (relative change of the total energy), dissipated (fraction of the energy lost, ≥ 0), note,
-    dt, steps, wall_time (time loop, s), n_particles, status). A blow-up (material failure, NaN,
-    total energy *grown* by more than ``energy_growth`` relative) ends the run with status
-    'unstable: <reason> at t=…'; a loss of energy is not instability (see
-    :func:`sph.integrate.run_monitored`).
-
-    ``fields`` (a folder, or None): particle fields as the ParaView series
-    ``plate_hpm_H<resolution>.pvd``, about ``field_frames`` frames (see :func:`sph.csph.solve_plate`).
-    """
-    from workbench import analytic
-
-    dt_factor = scene.dt_factor if dt_factor is None else dt_factor
-    check_dt_factor(dt_factor)
-    ps = lattice.plate(scene, resolution, mode=mode)
-    mat = scene.material
-    model = build(ps.X, ps.V, mat, ps.dx, re_ratio, stabilisation)
-    v0 = np.zeros_like(ps.X)
-    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
-    v0[ps.sets["fixed"]] = 0.0
-    fixed = np.zeros((ps.n, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    st = init(model, v0)
-    dt = time_step(model, dt_factor)
-    t_end = (scene.periods if periods is None else periods) * analytic.plate_period(scene)
-    n_steps = int(math.ceil(t_end / dt))
-    snap = Snapshots.open(fields, series_name(scene.name, "hpm", resolution), model.X, mat,
-                          lambda: _field_state(st), n_steps, monitor_chunk(n_steps, n_out),
-                          field_frames)
-    return _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth,
-                        snapshot=snap)
-
-
-def _field_state(st: State) -> dict:
-    """The state for a field snapshot: F of the last step (eq. 4) and the committed history."""
-    return dict(t=st.t, x=st.x, v=st.v, F=st.F, history=st.h)
-
-
-def _run_dynamic(model, st, ps, dt, t_end, n_out, fixed, scheme, energy_growth, a_ext=None,
-                 snapshot=None):
-    out = run_monitored(
-        lambda k: advance(model, st, dt, k, fixed=fixed, a_ext=a_ext, scheme=scheme),
-        lambda: energies(model, st), lambda: probe_displacement(ps, "tip_mid", st.x)[1],
-        lambda: st.status.any(), st, int(math.ceil(t_end / dt)), n_out, energy_growth,
-        snapshot=snapshot)
-    wall = out["wall_time"]
-    out.update(dt=dt, steps=int(st.steps), n_particles=int(model.n),
-               particle_steps_per_second=model.n * st.steps / wall if wall > 0 else float("nan"),
-               n_singular=model.n_singular)
-    return out
-
-
 def wls_discretisation(model: Model):
-    """The HPM body as a :class:`sph.csph.Discretisation`: eq. 4 is F_i = Σ_j (x_j − x_i) ⊗ G_ij
-    with G_ij = w_ij A_i⁻¹ X_ij (A_i symmetric), and the force of eq. 7 is −∂(Σ V ψ)/∂x — the same
-    structure as CSPH's eq. 35 and total-Lagrangian force, so CSPH's static Newton (tangent
-    K = ∂²Π/∂x∂x) solves HPM's statics unchanged. Without the stabilisation potential only."""
-    from . import csph
+    """The HPM body as a :class:`sph.total_lagrangian.Discretisation`: eq. 4 is
+    F_i = Σ_j (x_j − x_i) ⊗ G_ij with G_ij = w_ij A_i⁻¹ X_ij (A_i symmetric), and the force of
+    eq. 7 is −∂(Σ V ψ)/∂x — the gradient form of CSPH's eq. 35, so the static Newton and the modal
+    solve (tangent K = ∂²Π/∂x∂x) apply unchanged. Without the stabilisation potential only."""
+    from .correction import reverse_gradients
+    from .total_lagrangian import Discretisation
 
     rows = np.repeat(np.arange(model.n), np.diff(model.indptr))
     G = model.w[:, None] * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij)
-    GT = csph.reverse_gradients(model.indptr, model.indices, G)
+    GT = reverse_gradients(model.indptr, model.indices, G)
     N = model.n
-    return csph.Discretisation(model.X, model.V, model.m, model.re, "wls", model.indptr,
-                               model.indices, G, GT, np.broadcast_to(np.eye(2), (N, 2, 2)).copy(),
-                               np.ones(N, bool))
+    return Discretisation(model.X, model.V, model.m, model.re, "wls", model.indptr,
+                          model.indices, G, GT, np.broadcast_to(np.eye(2), (N, 2, 2)).copy(),
+                          np.ones(N, bool))
 
 
-def solve_cantilever(scene, resolution: int = 10, dt_factor: float = 0.5, re_ratio: float = RE_RATIO,
-                     stabilisation: float = 0.0, rtol: float = 1e-5, max_steps: int = 400000,
-                     mode: str = "node", fields=None, field_frames: int = DEFAULT_FRAMES,
-                     method: str = "newton") -> dict:
-    """Static tip-loaded cantilever (004 E).
-
-    ``method='newton'`` (default; a static solver for a static scene): the HPM body's
-    weighted-least-squares gradients (:func:`wls_discretisation`) in the shared static solver of
-    :func:`sph.csph.solve_cantilever` (Newton with load steps on −∂Π/∂x = f_ext; the tip load a
-    uniform shear traction over the tip column in proportion to the particle volumes). It needs
-    ``stabilisation = 0`` (the stabilisation potential has no tangent there).
-
-    ``method='dr'``: dynamic relaxation, the HPM dynamics with
-    mass-proportional damping c = 2 ω₁ (about critical for the first bending mode, ω₁ from the
-    Euler–Bernoulli beam), each load of ``scene.loads`` applied as equal forces on the tip column
-    (uniform shear traction), continued from the previous load, until the tip velocity scale
-    |Δtip|/Δt over a window falls below rtol · tip · ω₁.
-
-    Returns dict(load (dimensionless), tip_deflection (m, positive downward), tip_horizontal (m,
-    shortening), wall_time (s, cumulative to reach each load), n_particles, status (per load), steps (per load)).
-    ``fields`` (a folder, or None): the relaxed state of every load as one frame of the ParaView
-    series ``cantilever_hpm_H<resolution>.pvd`` ("time" = the load).
-    """
-    from workbench import analytic
-
-    if method not in ("newton", "dr"):
-        raise ValueError(f"method: {method!r} is not one of 'newton', 'dr'")
-    if method == "newton":
-        if stabilisation != 0.0:
-            raise ValueError(f"stabilisation: {stabilisation!r} is not allowed with method='newton' "
-                             "(allowed: 0; use method='dr' for the stabilised body)")
-        from . import csph
-
-        mat = scene.material
-
-        def disc(ps):
-            return wls_discretisation(build(ps.X, ps.V, mat, ps.dx, re_ratio, 0.0))
-
-        out = csph.solve_cantilever(scene, resolution, lattice_mode=mode, method="newton",
-                                    fields=fields, field_frames=field_frames,
-                                    discretisation=disc, solver_name="hpm")
-        out["method"] = "newton"
-        return out
-    check_dt_factor(dt_factor)
-    ps = lattice.cantilever(scene, resolution, mode=mode)
-    mat = scene.material
-    model = build(ps.X, ps.V, mat, ps.dx, re_ratio, stabilisation)
-    fixed = np.zeros((ps.n, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    st = init(model)
-    dt = time_step(model, dt_factor)
-    Ep, _ = analytic.plane_moduli(scene.E, scene.nu, scene.plane)
-    omega1 = 1.875104 ** 2 * math.sqrt(Ep * scene.I / (mat.rho * scene.H * scene.L ** 4))
-    damping = 2.0 * omega1
-    tip = ps.sets["tip"]
-    loads = list(scene.loads)
-    out = dict(load=np.array(loads), tip_deflection=np.full(len(loads), np.nan),
-               tip_horizontal=np.full(len(loads), np.nan), wall_time=np.zeros(len(loads)),
-               n_particles=int(model.n), status=["not run"] * len(loads), steps=np.zeros(len(loads), int))
-    window = max(50, int(0.25 * 2 * math.pi / omega1 / dt))
-    load_now = [0.0]
-    snap = Snapshots.open(fields, series_name(scene.name, "hpm", resolution), model.X, mat,
-                          lambda: dict(_field_state(st), t=load_now[0]), len(loads), 1,
-                          max(1, len(loads)))
-    for k, load in enumerate(loads):
-        t0 = time.perf_counter()
-        a_ext = np.zeros((ps.n, 2))
-        a_ext[tip, 1] = -scene.force(load) / len(tip) / model.m[tip]
-        status = "ok"
-        prev = probe_displacement(ps, "tip_mid", st.x)[1]
-        steps = 0
-        while True:
-            done = advance(model, st, dt, window, fixed=fixed, a_ext=a_ext, damping=damping)
-            steps += done
-            cur = probe_displacement(ps, "tip_mid", st.x)[1]
-            if done < window or not np.isfinite(cur):
-                status = f"unstable: non-finite state at t={st.t:.4g} s"
-                break
-            if abs(cur - prev) <= rtol * max(abs(cur), 1e-30) and steps > 4 * window:
-                break
-            if steps >= max_steps:
-                status = f"diverged: no static equilibrium after {steps} steps"
-                break
-            prev = cur
-        out["wall_time"][k] = time.perf_counter() - t0 + (out["wall_time"][k - 1] if k else 0.0)
-        out["steps"][k] = steps
-        out["status"][k] = status
-        if status != "ok":
-            break
-        if snap:
-            load_now[0] = float(load)
-            snap(k + 1)
-        out["tip_deflection"][k] = -probe_displacement(ps, "tip_mid", st.x)[1]
-        out["tip_horizontal"][k] = -probe_displacement(ps, "tip_mid", st.x)[0]
-    return out
+NAME = "hpm"
+OPTIONS = dict(re_ratio=f"r_e/Δx (default {RE_RATIO})",
+               stabilisation="zero-energy-mode stabilisation α in [0, 10] (default 0)",
+               scheme="'verlet' (default) | 'euler' (eq. 8 literally)")
 
 
-def bench(n_particles: int = 100_000, threads: int = 1, steps: int = 100) -> dict:
-    """Particle-steps per second of the plate's time loop (:func:`_advance`) at about
-    ``n_particles`` particles (node lattice) on ``threads`` numba threads, after a JIT warm-up.
-    Returns dict(particle_steps_per_second, n_particles, steps, loop_time, threads)."""
-    import numba
+class HPM(ParticleBody):
+    """An HPM body built from :class:`sph.particles.Particles` (2-D, one material)."""
 
-    from workbench import analytic
-    from workbench.scenes import Plate
+    name = NAME
 
-    from .bench import plate_resolution
+    def __init__(self, particles, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
+                 scheme: str = "verlet"):
+        super().__init__(particles)
+        ps = particles
+        if ps.dim != 2 or ps.plane == "stress":
+            raise ValueError("hpm: plane strain (2-D) only in this version; the model is "
+                             f"{ps.dim}-D{' plane stress' if ps.plane == 'stress' else ''}")
+        if len(ps.table) != 1:
+            raise ValueError("hpm: one material per body in this version (the model has "
+                             f"{len(ps.table)})")
+        if scheme not in ("verlet", "euler"):
+            raise ValueError(f"scheme: {scheme!r} is not one of 'verlet', 'euler'")
+        self.scheme = scheme
+        self.stabilisation = float(stabilisation)
+        self.model = build_model(ps.X, ps.V, ps.table[0], ps.dx, re_ratio, stabilisation,
+                           body=ps.body if len(ps.body_names) > 1 else None)
+        self.m = self.model.m
+        self.st = init(self.model)
+        self.x, self.v, self.acc = self.st.x, self.st.v, self.st.acc
 
-    numba.set_num_threads(threads)
-    scene = Plate()
-    ps = lattice.plate(scene, plate_resolution(n_particles), mode="node")
-    model = build(ps.X, ps.V, scene.material, ps.dx)
-    v0 = np.zeros_like(ps.X)
-    v0[:, 1] = analytic.plate_initial_velocity(scene, ps.X[:, 0])
-    fixed = np.zeros((ps.n, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    st = init(model, v0)
-    dt = time_step(model, scene.dt_factor)
-    advance(model, st, dt, 2, fixed=fixed)
-    t0 = time.perf_counter()
-    done = advance(model, st, dt, steps, fixed=fixed)
-    loop = time.perf_counter() - t0
-    return dict(particle_steps_per_second=model.n * done / loop, n_particles=model.n, steps=done,
-                loop_time=loop, threads=threads)
+    def start(self, v0, f_ext, extra=None) -> None:
+        super().start(v0, f_ext, extra)
+
+    def internal_force(self, x):
+        return forces(self.model, x, self.st)
+
+    def commit(self) -> None:
+        if self.model.material.n_history:
+            self.st.h[:] = self.st.h_new
+
+    def failed(self) -> bool:
+        return bool(self.st.status.any())
+
+    def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
+        if extra is not None:
+            return super().advance(n, dt, f_ext, fixed, v_fix, damping, extra)
+        self.st.t, self.st.steps = self.t, self.steps
+        done = advance(self.model, self.st, dt, n, fixed=fixed, v_fix=v_fix,
+                       a_ext=f_ext / self.m[:, None], damping=damping, scheme=self.scheme)
+        self.t, self.steps = self.st.t, self.st.steps
+        return done
+
+    def stored_energy(self) -> float:
+        return potential_energy(self.model, self.x)
+
+    def gradient_form(self):
+        from .total_lagrangian import Body
+
+        if self.stabilisation != 0.0:
+            return None
+        return Body(wls_discretisation(self.model), self.particles.table, self.particles.mat_id)
+
+    def field_state(self) -> dict:
+        return dict(t=self.t, x=self.x, v=self.v, F=self.st.F, history=self.st.h,
+                    mat_id=self.particles.mat_id, region=self.particles.region)
+
+
+def build(particles, **options) -> HPM:
+    """An HPM body of ``particles`` (:func:`sph.particles.discretise`); options: ``OPTIONS``."""
+    return HPM(particles, **options)

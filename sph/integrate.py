@@ -14,7 +14,8 @@ the kicks (v ← (v + dt/2 f/m)/(1 + c dt/2) after the force, v ← (1 − c dt/
 which is second order and exactly the undamped scheme for c = 0.
 
 The row routines (:func:`kick_drift_row`, :func:`kick_row`) are what a method's fused force loop
-calls per particle; :func:`kick_drift` and :func:`kick` are their parallel loops over all particles.
+calls per particle; :func:`kick_drift` and :func:`kick` are their parallel loops over all particles
+(the generic step of :meth:`sph.method.ParticleBody.advance`).
 """
 from __future__ import annotations
 
@@ -76,94 +77,3 @@ def kick(v, acc, fixed, v_fix, dt, damping):
     """:func:`kick_row` over all particles."""
     for a in prange(v.shape[0]):
         kick_row(a, v, acc, fixed, v_fix, dt, damping)
-
-
-def velocity_verlet(x, v, acc, accel_fn, dt: float, n_steps: int, fixed=None, v_fix=None,
-                    damping: float = 0.0, callback=None):
-    """Generic driver for a method without a fused loop: ``accel_fn(x) -> acc`` (N, d).
-
-    Advances the synchronised state (x, v, acc) in place by ``n_steps`` steps; ``callback(step, x,
-    v, acc)`` after each (return True to stop early). Returns the number of steps taken.
-    """
-    N, d = x.shape
-    fixed = np.zeros((N, d), np.uint8) if fixed is None else np.ascontiguousarray(fixed, np.uint8)
-    v_fix = np.zeros((N, d)) if v_fix is None else v_fix
-    for s in range(n_steps):
-        kick_drift(x, v, acc, fixed, v_fix, dt, damping)
-        acc[:] = accel_fn(x)
-        kick(v, acc, fixed, v_fix, dt, damping)
-        if callback is not None and callback(s + 1, x, v, acc):
-            return s + 1
-    return n_steps
-
-
-def monitor_chunk(n_steps: int, n_out: int) -> int:
-    """Steps per chunk of :func:`run_monitored`."""
-    return max(1, n_steps // n_out)
-
-
-def run_monitored(step, energies, observe, failed, state, n_steps: int, n_out: int,
-                  energy_growth: float, snapshot=None) -> dict:
-    """The monitored time loop of the plate drivers (hpm, classic SPH): ``n_steps`` steps in about
-    ``n_out`` chunks; after each chunk the energies and the observed quantity are recorded.
-
-    ``step(k) -> steps done``; ``energies() -> (kinetic, stored)``; ``observe() -> float`` (the tip
-    displacement); ``failed() -> bool`` (a material point failed); ``state`` has ``x`` and ``t``.
-    Unstable (status 'unstable: <reason> at t=…', the run ends) on a short step, a non-finite state,
-    or total energy *grown* by more than ``energy_growth`` of the initial energy
-    (:func:`sph.diagnostics.energy_change`, one-sided). A loss of energy is recorded as
-    ``dissipated`` (fraction of the initial energy lost at the end, ≥ 0) with a ``note`` when it
-    exceeds ``energy_growth``; the status stays 'ok'. ``period`` and ``amplitude`` come from the
-    observed history by :func:`sph.diagnostics.period_amplitude` (NaN for an unstable run).
-
-    ``snapshot`` (optional, a :class:`workbench.fields.Snapshots` built with ``chunk`` =
-    :func:`monitor_chunk`): called with the steps done before the loop, after every chunk and,
-    ``final=True``, at the end — field output between chunks, outside the compiled steps."""
-    import time
-
-    from .diagnostics import energy_change, period_amplitude
-
-    per = monitor_chunk(n_steps, n_out)
-    if snapshot is not None:
-        snapshot(0)
-    times, obs = [0.0], [0.0]
-    ke, pe = energies()
-    kes, pes = [ke], [pe]
-    e0 = ke + pe
-    status = "ok"
-    wall = 0.0
-    done_total = 0
-    while done_total < n_steps:
-        k = min(per, n_steps - done_total)
-        t0 = time.perf_counter()
-        done = step(k)
-        wall += time.perf_counter() - t0
-        done_total += done
-        if done < k or not np.isfinite(state.x).all():
-            reason = "material point failed (J <= 0 or no convergence)" if failed() else "non-finite state"
-            status = f"unstable: {reason} at t={state.t:.4g} s"
-            break
-        ke, pe = energies()
-        times.append(state.t)
-        obs.append(observe())
-        kes.append(ke)
-        pes.append(pe)
-        grew, change = energy_change(e0, ke + pe, e0, energy_growth)
-        if grew:
-            status = f"unstable: total energy grew by {change:+.3g} at t={state.t:.4g} s"
-            break
-        if snapshot is not None:
-            snapshot(done_total)
-    if snapshot is not None:
-        snapshot(done_total, final=True)
-    t, u = np.asarray(times), np.asarray(obs)
-    T, A = period_amplitude(t, u) if status == "ok" else (math.nan, math.nan)
-    ke_a, pe_a = np.asarray(kes), np.asarray(pes)
-    e = ke_a + pe_a
-    drift = float((e[-1] - e[0]) / e[0]) if e[0] else math.nan
-    dissipated = max(0.0, -drift) if math.isfinite(drift) else math.nan
-    note = (f"dissipated {100 * dissipated:.3g} % of the initial energy"
-            if status == "ok" and dissipated > energy_growth else "")
-    return dict(period=T, amplitude=A, time=t, tip_displacement=u, kinetic_energy=ke_a,
-                strain_energy=pe_a, energy_drift=drift, dissipated=dissipated, note=note,
-                status=status, wall_time=wall)

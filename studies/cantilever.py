@@ -213,6 +213,6 @@ def gates(ds: xr.Dataset) -> list[Gate]:
 
 
 def plot(ds: xr.Dataset, outdir) -> list:
-    from workbench import plots
+    from . import figures as plots
 
     return [plots.cantilever(ds, outdir)]

@@ -7,6 +7,7 @@ the exception into ``status = 'error: …'`` and the sweep goes on.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import logging
 import time
@@ -17,21 +18,31 @@ import numpy as np
 
 log = logging.getLogger("workbench")
 
-# solver name -> "module:function"; 'analytic' is handled by each study itself.
-SOLVER_ENTRY = {
-    "fem": "fem_reference:solve",
-    "csph": "sph.csph:solve",
-    "hpm": "sph.hpm:solve",
-    "sph": "sph.classic:solve",
-}
-ALL_SOLVERS = ("analytic", "fem", "csph", "hpm", "sph")
+# 'analytic' is handled by each study itself; 'fem' is the reference; every particle method of
+# :data:`sph.METHODS` runs through the one particle driver.
+SOLVER_ENTRY = {"fem": "fem_reference:solve"}
+"""Solvers other than the particle methods: name -> "module:function"."""
+
+
+def _particle_methods() -> tuple:
+    from sph import METHODS
+
+    return tuple(METHODS)
+
+
+ALL_SOLVERS = ("analytic", "fem") + _particle_methods()
 
 
 def solver_function(name: str):
-    if name not in SOLVER_ENTRY:
+    """``solve(scene, resolution, **options) -> dict`` of the solver ``name``."""
+    if name in SOLVER_ENTRY:
+        mod, fn = SOLVER_ENTRY[name].split(":")
+        return getattr(importlib.import_module(mod), fn)
+    if name not in _particle_methods():
         raise ValueError(f"solver: {name!r} is unknown; allowed: {', '.join(ALL_SOLVERS)}")
-    mod, fn = SOLVER_ENTRY[name].split(":")
-    return getattr(importlib.import_module(mod), fn)
+    from sph import driver
+
+    return functools.partial(driver.solve, name)
 
 
 def run_solver(name: str, scene, resolution: int, **options) -> dict:

@@ -34,6 +34,9 @@ QUICK_RESOLUTIONS = {"fem": (1,), "csph": (2,)}
 # linearly complete, so on a homogeneous state their error is the Newton tolerance (~1e-8) plus the
 # return mapping's (1e-12): 0.5 % leaves room for nothing but a genuine defect.
 TOL_REL = 5e-3
+# Method options of this study: csph with h = 1.3Δx (support 2.6Δx: enough neighbours on the
+# coarse block for the gradient correction).
+OPTIONS = {"csph": {"h_ratio": 1.3}}
 
 
 def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: bool = False,
@@ -56,7 +59,7 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
 
     ladders = {s: ladder(s, resolutions, sys.modules[__name__], quick)
                for s in solvers if s != "analytic"}
-    tasks = [Task.make(s, scene, r) for s, lad in ladders.items() for r in lad]
+    tasks = [Task.make(s, scene, r, **OPTIONS.get(s, {})) for s, lad in ladders.items() for r in lad]
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
 
     names, stress, nominal, wall, status, n_pts, res_used = [], [], [], [], [], [], []
@@ -177,6 +180,6 @@ def report_notes(ds: xr.Dataset) -> list[str]:
 
 
 def plot(ds: xr.Dataset, outdir) -> list:
-    from workbench import plots
+    from . import figures as plots
 
     return [plots.ss_curve(ds, outdir)]

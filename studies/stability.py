@@ -2,7 +2,7 @@
 
 For every particle method and scene (``ring``, ``slab``, ``rings``, ``plate``) and every time-step
 factor of the ladder, one run is classified as stable or not by the criteria of
-:mod:`sph.stability` (non-finite state or failed material point; energy balance grown by more
+the driver's one criterion (:mod:`sph.monitor`: non-finite state or failed material point; energy balance grown by more
 than 50 % — one-sided: a loss of energy, e.g. to artificial viscosity, is recorded as ``dissipated``
 with a ``note`` and the status stays 'ok'; particle disorder η₉₅ > 0.15), and its energy drift is
 recorded. The runs are :class:`studies.sweep.Task` s executed by :func:`studies.sweep.run_tasks`
@@ -33,7 +33,7 @@ import xarray as xr
 
 from workbench import results
 from workbench.scenes import Plate
-from workbench.stability_scenes import Ring, Rings, Slab
+from workbench.scenes import Ring, Rings, Slab
 
 from .common import Gate
 from .sweep import Task, run_tasks
@@ -51,8 +51,9 @@ SETUP = {
     "rings": (Rings(), 5, 4, (None, 0.03)),
     "plate": (Plate(), 10, 5, (2.0, 0.5)),
 }
-OPTIONS = {"hpm": {"stabilisation": 1.0}, "sph": {}, "csph": {"hourglass": 0.1}}
-PLATE_OPTIONS = {"hpm": {}, "sph": {}, "csph": {}}
+OPTIONS = {"hpm": {"stabilisation": 1.0}, "sph": {"stress": "hyperelastic"},
+           "csph": {"hourglass": 0.1, "h_ratio": 1.3}}
+PLATE_OPTIONS = {"hpm": {}, "sph": {"lattice": "cell"}, "csph": {}}
 
 
 def _task(solver, name, dt_factor, quick) -> Task:
@@ -120,7 +121,7 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False,
             "note": (("solver", "scene", "dt_factor"), note.astype(str), {"units": "-", "long_name":
                      "remark beside an 'ok' status (strong dissipation)"}),
             "disorder": (("solver", "scene", "dt_factor"), disorder, {"units": "-", "long_name":
-                         "particle disorder eta95 at the end (sph.stability)"}),
+                         "particle disorder eta95 at the end (sph.monitor)"}),
             "wall_time": (("solver", "scene", "dt_factor"), wall, {"units": "s"}),
             "status": (("solver", "scene", "dt_factor"), status.astype(str), {"units": "-"}),
         },
@@ -133,7 +134,7 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False,
         criterion="unstable if: non-finite state or failed material point; energy balance GROWN by more "
                   "than 0.5 of the largest energy seen, or non-finite (one-sided: a loss of energy is "
                   "dissipation, recorded in 'dissipated' with a note, status ok); particle disorder "
-                  "eta95 > 0.15 (sph.stability). Plate: non-finite state or failed material point; "
+                  "eta95 > 0.15 (sph.monitor). Plate: non-finite state or failed material point; "
                   "total energy grown by more than 0.5 of the initial energy (every method)",
         plane="strain", quick=int(quick),
         options_hpm="stabilisation=1 in ring/slab/rings, 0 on the plate; r_e = 2.1 dx",
@@ -231,8 +232,6 @@ def plot(ds: xr.Dataset, outdir) -> list:
     fig.colorbar(im, ax=ax, label="max stable dt factor [-]")
     ax.set_title("largest stable time step / CFL estimate dx/c_p, over the ladder "
                  + ", ".join(f"{f:g}" for f in ds.dt_factor.values), fontsize=8)
-    fig.tight_layout()
-    path = Path(outdir) / "stability_max_dt.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return [path]
+    from .figures import save
+
+    return [save(fig, Path(outdir) / "stability_max_dt.png")]

@@ -5,12 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from workbench import cli, results
+from workbench import results
+from workbench.app import cli
 
 
 @pytest.fixture(scope="module")
 def bench_ds(tmp_path_factory):
-    from sph import bench
+    from studies import bench
 
     out = tmp_path_factory.mktemp("bench")
     with pytest.MonkeyPatch.context() as mp:
@@ -69,7 +70,7 @@ def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path):
 
 
 def test_a_failed_measurement_is_a_status_not_a_crash():
-    from sph import bench
+    from studies import bench
 
     r = bench.measure("csph", 2000, 1, timeout=0.01)
     assert r["status"].startswith("error: timed out")

@@ -19,11 +19,11 @@ def _plate():
 def test_plate_fields_hold_the_solver_state(tmp_path, solver, lattice_mode):
     import pyvista as pv
 
-    from sph import lattice
+    from sph import particles
     from studies.common import solver_function
 
     scene = _plate()
-    out = solver_function(solver)(scene, 3, fields=tmp_path, field_frames=4)
+    out = solver_function(solver)(scene, 3, fields=tmp_path, field_frames=4, lattice=lattice_mode)
     assert out["status"] == "ok"
     frames = series_frames(tmp_path / f"plate_{solver}_H3.pvd")
     times = [t for t, _ in frames]
@@ -32,18 +32,18 @@ def test_plate_fields_hold_the_solver_state(tmp_path, solver, lattice_mode):
     reader = pv.get_reader(str(tmp_path / f"plate_{solver}_H3.pvd"))
     assert reader.time_values == pytest.approx(times)
 
-    ps = lattice.plate(scene, 3, mode=lattice_mode)
+    ps = particles.discretise(scene.model(scene.H / 3), 3, lattice_mode)
     n = ps.n
     first, last = pv.read(str(frames[0][1])), pv.read(str(frames[-1][1]))
     assert last.n_points == n == out["n_particles"]
     shapes = {k: last.point_data[k].shape for k in last.point_data.keys()}
     assert shapes == {"displacement": (n, 3), "velocity": (n, 3), "stress": (n, 9),
-                      "von_mises": (n,)}  # the plate is elastic: no ε_p, no damage
+                      "von_mises": (n,), "region": (n,)}  # the plate is elastic: no ε_p, no damage
     u = last.point_data["displacement"][:, :2]
     # points are the deformed positions: x − u is the reference lattice
     assert np.allclose(last.points[:, :2] - u, ps.X, rtol=0, atol=1e-12)
     # the tip probe of the last frame is the solver's last tip displacement
-    idx, w = ps.probes["tip_mid"]
+    idx, w = ps.probes["tip"]
     assert w @ u[idx, 1] == pytest.approx(out["tip_displacement"][-1], rel=1e-9, abs=1e-15)
     assert abs(out["tip_displacement"][-1]) > 1e-3  # a real deflection, not a trivial match
     # t = 0: undeformed, unstressed, moving with the initial velocity (zero in the clamp)
@@ -91,7 +91,7 @@ def test_cli_run_fields_and_report_note(tmp_path, monkeypatch, capsys):
     import xarray as xr
 
     from studies import plate
-    from workbench import cli, fields, verify
+    from workbench.app import cli, fields, verify
 
     monkeypatch.setenv("WORKBENCH_NO_CACHE", "1")
     out = tmp_path / "out"

@@ -5,7 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from sph import hpm, lattice
+import dataclasses
+from types import SimpleNamespace
+
+from sph import driver, hpm, particles
 from workbench.materials import RING_RUBBER, RUBBER
 from workbench.scenes import Plate
 
@@ -23,6 +26,13 @@ TOL_PLATE_PERIOD = 0.03
 TOL_PLATE_DRIFT = 1e-3
 
 
+def block(size, n, mode):
+    """Lattice particles of the box [0, size] with n cells along its first edge."""
+    dx = size[0] / n
+    X, V = particles.box((0.0,) * len(size), size, dx, mode)
+    return SimpleNamespace(X=X, V=V, dx=dx)
+
+
 def _deformed(ps, seed=0, jitter=0.1):
     rng = np.random.default_rng(seed)
     Fm = np.array([[1.1, 0.2], [-0.1, 0.95]])
@@ -32,8 +42,8 @@ def _deformed(ps, seed=0, jitter=0.1):
 @pytest.mark.parametrize("material", [RUBBER, RING_RUBBER], ids=["svk", "mooney_rivlin"])
 @pytest.mark.parametrize("stab", [0.0, 0.5], ids=["plain", "stabilised"])
 def test_force_is_minus_gradient_of_hamiltonian(material, stab):
-    ps = lattice.block((0.008, 0.006), 4, mode="cell")
-    model = hpm.build(ps.X, ps.V, material, ps.dx, 2.5, stab)
+    ps = block((0.008, 0.006), 4, mode="cell")
+    model = hpm.build_model(ps.X, ps.V, material, ps.dx, 2.5, stab)
     x = _deformed(ps)
     f = hpm.forces(model, x)
     h = 1e-6 * ps.dx
@@ -51,8 +61,8 @@ def test_force_is_minus_gradient_of_hamiltonian(material, stab):
 
 @pytest.mark.parametrize("stab", [0.0, 0.5])
 def test_momentum_conserved_by_the_forces(stab):
-    ps = lattice.block((0.02, 0.01), 10, mode="node")
-    model = hpm.build(ps.X, ps.V, RUBBER, ps.dx, 2.1, stab)
+    ps = block((0.02, 0.01), 10, mode="node")
+    model = hpm.build_model(ps.X, ps.V, RUBBER, ps.dx, 2.1, stab)
     x = _deformed(ps, seed=1)
     f = hpm.forces(model, x)
     scale = np.abs(f).max()
@@ -62,10 +72,10 @@ def test_momentum_conserved_by_the_forces(stab):
 
 
 def test_deformation_gradient_exact_for_affine_motion():
-    ps = lattice.block((0.01, 0.01), 6, mode="node")
+    ps = block((0.01, 0.01), 6, mode="node")
     rng = np.random.default_rng(3)
     X = ps.X + 0.2 * ps.dx * rng.standard_normal(ps.X.shape)
-    model = hpm.build(X, ps.V, RUBBER, ps.dx, 2.1)
+    model = hpm.build_model(X, ps.V, RUBBER, ps.dx, 2.1)
     Fm = np.array([[1.3, -0.4], [0.25, 0.8]])
     st = hpm.init(model, x0=X @ Fm.T + 0.01)
     assert np.abs(st.F[:, :2, :2] - Fm).max() < 1e-12
@@ -73,8 +83,8 @@ def test_deformation_gradient_exact_for_affine_motion():
 
 
 def test_free_body_conserves_momentum_and_energy():
-    ps = lattice.block((0.02, 0.01), 8, mode="node")
-    model = hpm.build(ps.X, ps.V, RUBBER, ps.dx, 2.1, 0.0)
+    ps = block((0.02, 0.01), 8, mode="node")
+    model = hpm.build_model(ps.X, ps.V, RUBBER, ps.dx, 2.1, 0.0)
     rng = np.random.default_rng(4)
     v0 = 0.5 * rng.standard_normal(ps.X.shape)
     st = hpm.init(model, v0)
@@ -104,23 +114,25 @@ def test_pure_bending_energy_node_lattice():
     exact = 0.5 * Ep * k ** 2 * 0.02 ** 3 / 12 * 0.2
     errs = {}
     for mode in ("node", "cell"):
-        ps = lattice.block((0.2, 0.02), 100, mode=mode)
+        ps = block((0.2, 0.02), 100, mode=mode)
         X = ps.X - np.array([0.0, 0.01])
         u = np.stack([-k * X[:, 0] * X[:, 1], 0.5 * k * X[:, 0] ** 2 + 0.5 * nu_p * k * X[:, 1] ** 2], 1)
-        model = hpm.build(X, ps.V, mat, ps.dx, 2.1)
+        model = hpm.build_model(X, ps.V, mat, ps.dx, 2.1)
         errs[mode] = hpm.potential_energy(model, X + u) / exact - 1
     assert abs(errs["node"]) < 0.02, errs
     assert errs["cell"] < -0.05, errs  # the known surface error must show on the cell lattice
 
 
 def test_invalid_dt_factor_names_the_parameter():
-    for bad in (0.0, -1.0, float("nan")):
+    from workbench.scenes import with_overrides
+
+    for bad in ("0.0", "-1.0", "nan"):
         with pytest.raises(ValueError, match="dt_factor"):
-            hpm.solve(Plate(), 3, dt_factor=bad)
+            with_overrides(Plate(), {"dt_factor": bad})
 
 
 def test_blow_up_is_a_status_not_an_exception():
-    out = hpm.solve(Plate(periods=0.05), 4, dt_factor=4.0)
+    out = driver.solve("hpm", Plate(periods=0.05, dt_factor=4.0), 4)
     assert out["status"].startswith("unstable:") and "t=" in out["status"]
     assert math.isnan(out["period"])
 
@@ -136,7 +148,7 @@ def fem_period():
 
 @pytest.mark.slow  # ~15 s on an idle 2-core machine, ~60 s on a busy one
 def test_plate_period_and_energy_drift_at_H_over_dx_10(fem_period):
-    out = hpm.solve(Plate(), 10)
+    out = driver.solve("hpm", Plate(), 10)
     assert out["status"] == "ok", out["status"]
     err = abs(out["period"] - fem_period) / fem_period
     assert err < TOL_PLATE_PERIOD, f"period {out['period']:.5f} s vs FEM {fem_period:.5f} s: {err:.3%}"
@@ -155,7 +167,7 @@ def test_cantilever_small_load_against_timoshenko():
     from workbench.scenes import Cantilever
 
     sc = Cantilever(loads=(0.00192,))
-    out = hpm.solve(sc, 10)
+    out = driver.solve("hpm", sc, 10)
     assert out["status"] == ["ok"], out["status"]
     ref = analytic.cantilever_tip(sc, 0.00192)
     err = abs(out["tip_deflection"][0] - ref) / ref
@@ -167,31 +179,30 @@ def test_wls_discretisation_gives_the_hpm_force():
     G_ij = w_ij A_i⁻¹ X_ij: the CSPH body built on it must give HPM's force to round-off at an
     arbitrary deformed state (this is what lets HPM use CSPH's static Newton); both return the
     force on the particles, −∂Π/∂x."""
-    from sph import csph
+    from sph import total_lagrangian
     from workbench.scenes import Cantilever
 
     sc = Cantilever()
-    ps = lattice.cantilever(sc, 4, mode="node")
-    m = hpm.build(ps.X, ps.V, sc.material, ps.dx)
+    ps = particles.discretise(sc.model(sc.H / 4), 4, "node")
+    m = hpm.build_model(ps.X, ps.V, sc.material, ps.dx)
     rng = np.random.default_rng(0)
     x = ps.X + 1e-3 * rng.standard_normal(ps.X.shape)
     x[:, 1] += 0.05 * ps.X[:, 0] ** 2
     f_hpm = hpm.forces(m, x)
-    f_csph = csph.Body(hpm.wls_discretisation(m), sc.material).evaluate(np.ascontiguousarray(x))
+    f_csph = total_lagrangian.Body(hpm.wls_discretisation(m), sc.material).evaluate(np.ascontiguousarray(x))
     assert np.abs(f_hpm - f_csph).max() < 1e-12 * np.abs(f_hpm).max()
 
 
 def test_static_newton_agrees_with_dynamic_relaxation():
-    """The two static paths of hpm.solve_cantilever reach the same equilibrium: Newton to 1e-8 of
-    the load, dynamic relaxation stopped at a relative tip-velocity scale of 1e-5 — agreement to
-    1e-3 covers the DR stopping error (measured 3e-5 at H/Δx = 5) and the tip-load split (equal
-    forces in DR, volume-weighted in Newton)."""
+    """The two static paths of the driver reach the same equilibrium of the HPM body: Newton to
+    1e-8 of the load or reaction, dynamic relaxation stopped at a residual of 1e-4 of the load —
+    agreement to 1e-3 covers the DR stopping error. The stabilised body has no static solver."""
     from workbench.scenes import Cantilever
 
     sc = Cantilever(loads=(0.00192, 1.0))
-    newton = hpm.solve_cantilever(sc, 5)
-    dr = hpm.solve_cantilever(sc, 5, method="dr")
+    newton = driver.solve("hpm", sc, 5)
+    dr = driver.solve("hpm", sc, 5, static="dr")
     assert newton["status"] == ["ok", "ok"] and dr["status"] == ["ok", "ok"]
     assert np.allclose(newton["tip_deflection"], dr["tip_deflection"], rtol=1e-3)
-    with pytest.raises(ValueError, match="stabilisation"):
-        hpm.solve_cantilever(sc, 5, stabilisation=1.0)
+    with pytest.raises(ValueError, match="static"):
+        driver.solve("hpm", sc, 5, stabilisation=1.0)

@@ -1,20 +1,50 @@
-"""The shared velocity-Verlet integrator: second-order accurate and energy-conserving on a
-harmonic chain, fixed DOFs held, damping dissipates; the CFL step guard."""
+"""The shared velocity-Verlet integrator (the generic step of sph.method.ParticleBody, built on
+the rows of sph.integrate): second-order accurate and energy-conserving on a harmonic chain,
+fixed DOFs held, damping dissipates; the CFL step guard."""
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from sph.integrate import cfl_time_step, velocity_verlet
+from sph.integrate import cfl_time_step
+from sph.method import ParticleBody
+
+
+class Chain(ParticleBody):
+    """Unit masses on a line joined by springs of stiffness k and rest length 1."""
+
+    def __init__(self, n, k):
+        X = np.c_[np.arange(n, dtype=float), np.zeros(n)]
+        super().__init__(SimpleNamespace(X=X, m=np.ones(n)))
+        self.k = k
+
+    def internal_force(self, x):
+        f = np.zeros_like(x)
+        s = np.diff(x[:, 0]) - 1.0
+        f[:-1, 0] += self.k * s
+        f[1:, 0] -= self.k * s
+        return f
+
+
+def velocity_verlet(x, v, acc, accel, dt, n, fixed=None, damping=0.0, callback=None):
+    """n steps of the generic velocity Verlet on the chain whose state is (x, v, acc)."""
+    b = accel.body
+    b.x, b.v, b.acc = x, v, acc
+    fixed = np.zeros_like(x, dtype=np.uint8) if fixed is None else fixed
+    zero = np.zeros_like(x)
+    for s in range(n):
+        assert b.advance(1, dt, zero, fixed, zero, damping) == 1
+        if callback is not None:
+            callback(s, b.x, b.v, b.acc)
 
 
 def chain(n=6, k=100.0):
+    body = Chain(n, k)
+
     def accel(x):
-        a = np.zeros_like(x)
-        s = np.diff(x[:, 0]) - 1.0
-        a[:-1, 0] += k * s
-        a[1:, 0] -= k * s
-        return a
-    x = np.c_[np.arange(n, dtype=float), np.zeros(n)]
-    return x, accel
+        return body.internal_force(x) / body.m[:, None]
+    accel.body = body
+    return body.X.copy(), accel
 
 
 def energy(x, v, k=100.0):

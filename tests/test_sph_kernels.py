@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from sph import kernels, lattice
+from sph import kernels, particles
 from sph.neighbours import neighbour_list
 
 KERNELS = ["cubic_spline", "wendland_c2"]
@@ -39,7 +39,7 @@ def test_discrete_moments_on_lattice(kernel, dim):
     lattice quadrature error: up to 1 % at this h/Δx), Σ V ∇W = 0 by symmetry (round-off),
     Σ V (X_b − X_a) ⊗ ∇W_b(X_a) ≈ I (first moment, the quantity eq. 31 corrects; the uncorrected lattice sum is off by up to 2.6 %, hence 3 %)."""
     k, n = kernels.kernel_code(kernel), 8
-    X, V = lattice.grid((0,) * dim, (n,) * dim, 1.0, "cell")
+    X, V = particles.box((0,) * dim, (n,) * dim, 1.0, "cell")
     h = 1.3
     indptr, indices = neighbour_list(X, 2 * h)
     a = int(np.argmin(np.linalg.norm(X - n / 2 + 0.5, axis=1)))

@@ -3,7 +3,7 @@ pairs at exactly the cut-off, 2-D and 3-D), and is symmetric."""
 import numpy as np
 import pytest
 
-from sph import lattice
+from sph import particles
 from sph.neighbours import brute_force, neighbour_list
 
 
@@ -18,7 +18,7 @@ def test_random_cloud_equals_brute_force(dim, radius):
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_lattice_with_ties_and_symmetry(dim):
-    X, _ = lattice.grid((0,) * dim, (1,) * dim, 0.125, "node")
+    X, _ = particles.box((0,) * dim, (1,) * dim, 0.125, "node")
     for radius in (0.25, 0.26, 0.125 * 2.2):  # 0.25 = 2Δx exactly: strict '<' excludes it
         p1, i1 = neighbour_list(X, radius)
         p2, i2 = brute_force(X, radius)

@@ -1,15 +1,25 @@
-"""Stability scenes (sph.stability): the ring under internal pressure — stable with the Lagrangian
-kernel (HPM), clumping with the Eulerian kernel (classic SPH) — and momentum through the collision
-of two rings (sph.contact)."""
+"""Stability scenes (workbench.scenes.stability, run by the one driver with the criterion of
+sph.monitor): the ring under internal pressure — stable with the Lagrangian kernel (HPM), clumping
+with the Eulerian kernel (classic SPH) — and momentum through the collision of two rings
+(sph.contact)."""
 import numpy as np
 import pytest
 
-from sph import stability
+from sph import driver
 from sph.contact import contact_forces
-from workbench.scenes import ParameterError
-from workbench.stability_scenes import Ring, Rings, Slab
+from workbench.scenes import ParameterError, Ring, Rings, Slab
 
-# Measure: particle disorder η₉₅ (sph.stability docstring), threshold DISORDER_TOL = 0.15. A
+# The method options of the stability study (studies/stability.py).
+OPTIONS = {"hpm": {}, "sph": {"stress": "hyperelastic"}, "csph": {"h_ratio": 1.3}}
+
+
+class stability:  # noqa: N801  (reads as the old module's call)
+    @staticmethod
+    def solve(method, scene, resolution, **options):
+        return driver.solve(method, scene, resolution, **{**OPTIONS[method], **options})
+
+
+# Measure: particle disorder η₉₅ (sph.monitor docstring), threshold DISORDER_TOL = 0.15. A
 # smooth deformation keeps η₉₅ ≲ 0.06 (the stabilised HPM ring peaks at ~0.06 while it rings after
 # the sudden pressure); clumping gives 0.2–0.3.
 RING_T_END = 0.03  # s: the Eulerian ring clumps within ~5 ms; 0.03 s is two breathing periods.
@@ -37,7 +47,7 @@ def test_csph_ring_stable_at_the_smallest_dt_factor():
 def test_csph_slab_zero_energy_modes_and_hourglass_control():
     """The slab's long run (t = 0.15 s, stretch ≈ 1.3): without hourglass control CSPH's particles
     drift into a particle-scale zig-zag — the rank deficiency of nodal integration, not the tensile
-    instability (Belytschko et al. 2000) — and the disorder criterion (η₉₅ > 0.15, sph.stability)
+    instability (Belytschko et al. 2000) — and the disorder criterion (η₉₅ > 0.15, sph.monitor)
     flags it; with the control of the stability study (α = 0.1) the run stays below it.
     Measured: η₉₅ 0.18 at t = 0.125 s without, 0.115 at the end with α = 0.1 (stabilised hpm: 0.007)."""
     sc = Slab(dt_factor=0.3)
@@ -51,7 +61,7 @@ def test_csph_slab_zero_energy_modes_and_hourglass_control():
 def test_energy_criterion_is_one_sided():
     """Dissipation is not instability: a loss of energy of any size passes; growth beyond the
     tolerance, or a non-finite energy, fails."""
-    from sph.diagnostics import energy_change
+    from sph.monitor import energy_change
 
     assert energy_change(1.0, 0.1, 1.0, 0.5) == (False, pytest.approx(-0.9))
     assert energy_change(1.0, 1.6, 1.0, 0.5)[0]
@@ -80,14 +90,20 @@ def test_contact_forces_are_equal_and_opposite():
 
 @pytest.mark.parametrize("method", ["hpm", "sph", "csph"])
 def test_momentum_conserved_through_the_ring_collision(method):
-    sc = Rings(t_end=0.015)  # contact begins at ~5 ms
+    """Total momentum through the collision to round-off (the contact pair forces are equal and
+    opposite), and the rings did meet and push each other back: the mean x velocity of the left
+    ring, +0.2 m/s at the start, has fallen by more than half (contact begins at ~5 ms; by 15 ms
+    the rings are well into the rebound)."""
+    sc = Rings(t_end=0.015)
     out = stability.solve(method, sc, 4, stabilisation=1.0) if method == "hpm" else stability.solve(method, sc, 4)
+    assert out["status"] == "ok", out["status"]
     p = out["linear_momentum"]
     mass = 2 * sc.rho * np.pi * (sc.R_out ** 2 - sc.R_in ** 2)
     scale = 0.5 * mass * sc.speed  # momentum of one ring
     assert np.abs(p).max() < 1e-12 * scale, np.abs(p).max() / scale
-    # the rings did meet: the x velocity of ring 0 has changed substantially
-    assert out["status"].startswith(("ok", "unstable"))
+    t, u = out["time"], out["left_u"]
+    v_end = (u[-1] - u[-2]) / (t[-1] - t[-2])
+    assert v_end < 0.5 * sc.speed, v_end
 
 
 def test_scene_parameters_are_validated():

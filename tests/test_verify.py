@@ -14,7 +14,7 @@ import studies
 def verified(tmp_path_factory):
     out = tmp_path_factory.mktemp("verify")
     env = dict(os.environ, WORKBENCH_CACHE=str(out / "cache"))
-    proc = subprocess.run([sys.executable, "-m", "workbench.cli", "verify", "--quick", "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "workbench.app.cli", "verify", "--quick", "--out", str(out)],
                           capture_output=True, text=True, env=env, timeout=900)
     return out, proc
 

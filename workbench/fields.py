@@ -159,22 +159,27 @@ def check_frames(frames) -> int:
     return int(frames)
 
 
-def particle_point_data(material, X, x, v, F=None, history=None, sigma=None) -> dict:
+def particle_point_data(material, X, x, v, F=None, history=None, sigma=None, mat_id=None,
+                        region=None) -> dict:
     """Point data of one particle snapshot: ``displacement`` x − X (m), ``velocity`` (m/s),
-    ``stress`` (Cauchy, 3×3, Pa; plane strain keeps σ_zz), ``von_mises`` (Pa), and for a J2
-    material ``plastic_strain`` (equivalent plastic strain ε_p, -) and ``damage`` (D, -).
+    ``stress`` (Cauchy, 3×3, Pa; plane strain keeps σ_zz), ``von_mises`` (Pa), and where a J2
+    material is present ``plastic_strain`` (equivalent plastic strain ε_p, -) and ``damage``
+    (D, -); ``region`` (the region index of each particle) when given.
 
-    The Cauchy stress is ``sigma`` when the method carries it (classic SPH), else it is evaluated
-    from the deformation gradients F (N, 3, 3) and the committed ``history`` by the shared material
+    ``material``: a Material or a MaterialTable (then ``mat_id`` gives each particle's row). The
+    Cauchy stress is ``sigma`` when the method carries it (classic SPH), else it is evaluated from
+    the deformation gradients F (N, 3, 3) and the committed ``history`` by the shared material
     routine (no new stress state is created; the history is not changed)."""
-    from .materials import HIST_DAMAGE, HIST_EPS_P, evaluate
+    from .materials import HIST_DAMAGE, HIST_EPS_P, MaterialTable, evaluate
 
+    table = MaterialTable.of(material)
     x = np.asarray(x, dtype=float)
     d = x.shape[1]
     if sigma is None:
         if F is None:
             raise ValueError("particle_point_data: give F or sigma")
-        sigma = evaluate(material, np.ascontiguousarray(F), history, stress="sigma")["stress"]
+        sigma = evaluate(table, np.ascontiguousarray(F), history, stress="sigma",
+                         mat_id=mat_id)["stress"]
     s = np.asarray(sigma, dtype=float)
     if s.shape[1] < 3:  # a 2×2 in-plane stress: no σ_zz known
         full = np.zeros((s.shape[0], 3, 3))
@@ -183,10 +188,15 @@ def particle_point_data(material, X, x, v, F=None, history=None, sigma=None) -> 
     dev = s - np.einsum("nii->n", s)[:, None, None] / 3.0 * np.eye(3)
     out = dict(displacement=x - np.asarray(X, dtype=float)[:, :d], velocity=np.asarray(v, dtype=float),
                stress=s, von_mises=np.sqrt(1.5 * np.einsum("nij,nij->n", dev, dev)))
-    if material.law == "j2" and history is not None and np.shape(history)[1] > HIST_DAMAGE:
+    if (any(m.law == "j2" for m in table.materials) and history is not None
+            and np.shape(history)[1] > HIST_DAMAGE):
         h = np.asarray(history)
-        out["plastic_strain"] = h[:, HIST_EPS_P].copy()
-        out["damage"] = h[:, HIST_DAMAGE].copy()
+        j2 = np.array([m.law == "j2" for m in table.materials])[
+            np.zeros(len(x), np.int64) if mat_id is None else np.asarray(mat_id)]
+        out["plastic_strain"] = np.where(j2, h[:, HIST_EPS_P], 0.0)
+        out["damage"] = np.where(j2, h[:, HIST_DAMAGE], 0.0)
+    if region is not None:
+        out["region"] = np.asarray(region, dtype=float)
     return out
 
 
@@ -224,7 +234,8 @@ class Snapshots:
         self.last = steps_done
         st = self.state()
         data = particle_point_data(self.material, self.X, st["x"], st["v"], st.get("F"),
-                                   st.get("history"), st.get("sigma"))
+                                   st.get("history"), st.get("sigma"), st.get("mat_id"),
+                                   st.get("region"))
         return self.series.add(st["t"], st["x"], **data)
 
 

@@ -8,8 +8,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .materials import Material
-from .scenes import ParameterError, Scene, param
+from ..materials import Material
+import workbench.scenes.model as m
+from .params import ParameterError, Scene, param
+from .shapes import Box, Cylinder
 
 
 @dataclass(frozen=True)
@@ -46,6 +48,18 @@ class Ring(Scene):
     def material(self) -> Material:
         return Material.mooney_rivlin(c1=self.c1, c2=self.c2, lam=self.lam, rho=self.rho)
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """The ring on concentric circles; the pressure on its inner surface acts on the innermost
+        layer (its boundary area vectors); explicit dynamics with the stability monitor."""
+        dr = (self.R_out - self.R_in) / 15 if spacing is None else spacing
+        ring = Cylinder((0.0, 0.0), self.R_out, inner=self.R_in)
+        return m.Model(
+            dim=2, plane="strain", length=self.R_out - self.R_in, name=self.name,
+            regions=(m.Region("ring", ring, self.material, arrangement="concentric"),),
+            sets=(m.Set("inner", Cylinder((0.0, 0.0), self.R_in + dr, inner=self.R_in)),),
+            loads=(m.Pressure("inner", self.pressure),),
+            drive=_monitored(self))
+
 
 @dataclass(frozen=True)
 class Slab(Scene):
@@ -81,6 +95,24 @@ class Slab(Scene):
     def material(self) -> Material:
         return Material.from_bulk_shear("svk", K=self.K, G=self.G, rho=self.rho)
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """The slab on a cell lattice; the end strips move outward at ±accel·min(t, t_load)
+        (prescribed x velocity); the disorder is measured away from the strips (more than
+        2 r_e = 4.2 spacings from them: the strain jump at a strip edge is not disorder). The
+        energy criterion is off: the kinematic drive does work the balance does not count."""
+        dx = self.height / 10 if spacing is None else spacing
+        L, Hs, w = self.length, self.height, self.strip
+        v = m.Table((0.0, self.t_load), (0.0, self.accel * self.t_load))
+        vneg = m.Table((0.0, self.t_load), (0.0, -self.accel * self.t_load))
+        lo, hi = w + 4.2 * dx, L - w - 4.2 * dx
+        return m.Model(
+            dim=2, plane="strain", length=Hs, lattice="cell", name=self.name,
+            regions=(m.Region("slab", Box((0.0, 0.0), (L, Hs)), self.material),),
+            sets=(m.Set("left", Box((0.0, 0.0), (w, Hs))), m.Set("right", Box((L - w, 0.0), (L, Hs))),
+                  m.Set("interior", Box((lo, 0.0), (max(hi, lo + dx), Hs)))),
+            constraints=(m.Prescribed("left", 0, velocity=vneg), m.Prescribed("right", 0, velocity=v)),
+            drive=_monitored(self, energy=False, disorder_set="interior"))
+
 
 @dataclass(frozen=True)
 class Rings(Scene):
@@ -111,5 +143,42 @@ class Rings(Scene):
     def material(self) -> Material:
         return Material.from_bulk_shear("svk", K=self.K, G=self.G, rho=self.rho)
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """Two rings (bodies 'left' and 'right') on concentric circles, each moving towards the
+        other; contact between them at the particle spacing with the penalty stiffness
+        ``contact_stiffness`` × (λ + 2μ); observed: the mean x displacement of the left ring."""
+        dr = (self.R_out - self.R_in) / 10 if spacing is None else spacing
+        c = self.R_out + self.gap / 2
+        mat = self.material
+        rings = []
+        for name, x, u in (("left", -c, self.speed), ("right", c, -self.speed)):
+            rings.append(m.Region(name, Cylinder((x, 0.0), self.R_out, inner=self.R_in), mat,
+                                  body=name, arrangement="concentric"))
+        return m.Model(
+            dim=2, plane="strain", length=self.R_out - self.R_in, name=self.name,
+            regions=tuple(rings),
+            sets=(m.Set("left_ring", rings[0].shape, region="left"),),
+            observables=(m.Displacement("left_u", "left_ring", 0),),
+            loads=(m.InitialVelocity((self.speed, 0.0), regions=("left",)),
+                   m.InitialVelocity((-self.speed, 0.0), regions=("right",))),
+            contact=(m.Contact(("left", "right"), self.contact_stiffness * (mat.lam + 2 * mat.mu), dr),),
+            drive=_monitored(self))
 
-STABILITY_SCENES = {"ring": Ring, "slab": Slab, "rings": Rings}
+
+ENERGY_TOL = 0.5
+"""Energy criterion of the stability scenes: the balance grown by more than half the largest
+energy seen."""
+DISORDER_TOL = 0.15
+"""Disorder criterion: η₉₅ above 0.15 (see :mod:`sph.monitor`)."""
+N_OUT = 100
+
+
+def _monitored(scene, energy: bool = True, disorder_set=None) -> m.Explicit:
+    """The explicit drive of a stability scene: its end time and time-step factor, the energy
+    criterion (unless off) and the disorder criterion."""
+    return m.Explicit(scene.t_end, scene.dt_factor, n_out=N_OUT,
+                      energy_growth=ENERGY_TOL if energy else None, disorder=DISORDER_TOL,
+                      disorder_set=disorder_set)
+
+
+

@@ -1,147 +1,17 @@
-"""The benchmark scenes (``../shared/design/scenes.md``) as frozen dataclasses.
-
-A scene says what a problem needs — dimension and plane, geometry, material, loads, end time —
-so that each solver models no more than that. Every field is a parameter that ``workbench list``
-shows and ``--set NAME=VALUE`` overrides; each carries its units, allowed range and a description in
-its ``metadata``. Scenes are changed by copies: :func:`with_overrides` validates every value and
-raises :class:`ParameterError` naming the parameter and its allowed range.
-"""
+"""The headline scenes (``../shared/design/scenes.md``): the SS curve, the static cantilever and the
+oscillating plate, as parameters (``workbench list``, ``--set``) and as models (regions, sets,
+loads, drive, observables) that every method runs."""
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
-from .materials import Material
+import numpy as np
 
-
-class ParameterError(ValueError):
-    """A scene or run parameter outside its allowed range (the CLI prints it as one line)."""
-
-
-def param(default, units: str, doc: str, lo: float | None = None, hi: float | None = None,
-          lo_open: bool = False, hi_open: bool = False, choices: tuple | None = None):
-    """A scene field with units, an allowed range (``lo``/``hi``, open or closed) and a description."""
-    return field(default=default, metadata=dict(units=units, doc=doc, lo=lo, hi=hi,
-                                                lo_open=lo_open, hi_open=hi_open, choices=choices,
-                                                boolean=isinstance(default, bool)))
-
-
-def _range_text(md) -> str:
-    if md.get("boolean"):
-        return "true or false"
-    if md.get("choices"):
-        return "one of " + ", ".join(map(str, md["choices"]))
-    lo, hi = md.get("lo"), md.get("hi")
-    left = "(" if md.get("lo_open") else "["
-    right = ")" if md.get("hi_open") else "]"
-    lo_s = "-inf" if lo is None else f"{lo:g}"
-    hi_s = "inf" if hi is None else f"{hi:g}"
-    if lo is None:
-        left = "("
-    if hi is None:
-        right = ")"
-    return f"{left}{lo_s}, {hi_s}{right}"
-
-
-def _check_value(name: str, value, md) -> None:
-    units = md.get("units") or ""
-    unit_s = f" {units}" if units and units != "-" else ""
-    if md.get("choices"):
-        if value not in md["choices"]:
-            raise ParameterError(f"{name}: {value!r} is not allowed; allowed: {_range_text(md)}")
-        return
-    if isinstance(value, tuple):
-        for v in value:
-            _check_value(name, v, md)
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return
-    lo, hi = md.get("lo"), md.get("hi")
-    bad = (isinstance(value, float) and math.isnan(value))
-    if lo is not None:
-        bad |= value <= lo if md.get("lo_open") else value < lo
-    if hi is not None:
-        bad |= value >= hi if md.get("hi_open") else value > hi
-    if bad:
-        raise ParameterError(f"{name}: {value:g}{unit_s} is out of range; allowed: {_range_text(md)}{unit_s}")
-
-
-@dataclass(frozen=True)
-class Scene:
-    """Base class: validation, parameter listing and overrides shared by every scene."""
-
-    name: str = field(default="scene", metadata=dict(hidden=True))
-
-    def __post_init__(self):
-        for f in dataclasses.fields(self):
-            if f.metadata.get("hidden"):
-                continue
-            _check_value(f.name, getattr(self, f.name), f.metadata)
-        self.check()
-
-    def check(self) -> None:
-        """Cross-parameter checks of a concrete scene."""
-
-    @classmethod
-    def parameters(cls) -> list[dict[str, Any]]:
-        """Name, default, units, allowed range and description of every parameter."""
-        out = []
-        for f in dataclasses.fields(cls):
-            if f.metadata.get("hidden"):
-                continue
-            out.append(dict(name=f.name, default=f.default, units=f.metadata.get("units", ""),
-                            range=_range_text(f.metadata), doc=f.metadata.get("doc", "")))
-        return out
-
-    def attrs(self) -> dict[str, Any]:
-        """The parameters as dataset attributes (``param_NAME``) with their units."""
-        out = {}
-        for f in dataclasses.fields(self):
-            if f.metadata.get("hidden"):
-                continue
-            v = getattr(self, f.name)
-            if isinstance(v, bool):
-                v = int(v)
-            elif isinstance(v, tuple):
-                v = list(v)
-            out[f"param_{f.name}"] = v
-            out[f"param_{f.name}_units"] = f.metadata.get("units", "")
-        return out
-
-
-def with_overrides(scene: Scene, overrides: dict[str, str]) -> Scene:
-    """A copy of ``scene`` with string overrides (``--set NAME=VALUE``) parsed and validated."""
-    fields = {f.name: f for f in dataclasses.fields(scene) if not f.metadata.get("hidden")}
-    changes = {}
-    for name, text in overrides.items():
-        if name not in fields:
-            raise ParameterError(f"{name}: unknown parameter of scene '{scene.name}'; "
-                                 f"known: {', '.join(fields)}")
-        default = fields[name].default
-        try:
-            if isinstance(default, bool):
-                if text.lower() not in ("true", "false", "1", "0", "yes", "no"):
-                    raise ValueError
-                value = text.lower() in ("true", "1", "yes")
-            elif isinstance(default, int):
-                value = int(text)
-            elif isinstance(default, float):
-                value = float(text)
-            elif isinstance(default, tuple):
-                value = tuple(float(t) for t in text.split(",") if t.strip())
-            else:
-                value = text
-        except ValueError:
-            raise ParameterError(f"{name}: cannot read {text!r} as {type(default).__name__}; "
-                                 f"allowed: {_range_text(fields[name].metadata)}") from None
-        changes[name] = value
-    try:
-        return dataclasses.replace(scene, **changes)
-    except ValueError as err:  # Material validation or a cross check
-        raise ParameterError(str(err)) from None
-
+from ..materials import Material
+import workbench.scenes.model as m
+from .params import ParameterError, Scene, param
+from .shapes import Box, Plane, Point
 
 # ------------------------------------------------------------------------------------------------
 # Headline scenes
@@ -200,6 +70,50 @@ class SSCurve(Scene):
         back = np.linspace(low, self.max_strain, k + 1)[1:]
         return np.concatenate([up, down, back])
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """The block [0, a]³: rollers on X=0, Y=0, Z=0 (symmetry planes), the face X=a moved to
+        x = a exp(ε) along the strain path (the load parameter ε is the logarithmic axial
+        strain); observed: the axial reaction on X=a, the mean positions of the faces Y=a and
+        Z=a (the current cross-section) and the mean Cauchy stress σ_xx."""
+        a = self.size
+        faces = [m.Set(f"{ax}{k}", Plane(i, k * a)) for i, ax in enumerate("xyz") for k in (0, 1)]
+        return m.Model(
+            dim=3, plane=None, length=a, name=self.name,
+            regions=(m.Region("block", Box((0, 0, 0), (a, a, a)), self.material),),
+            sets=tuple(faces),
+            constraints=(m.Roller("x0", 0), m.Roller("y0", 1), m.Roller("z0", 2),
+                         m.Prescribed("x1", 0, displacement=Stretch(a))),
+            drive=m.Static(tuple(float(e) for e in self.strain_path()), "strain", "-"),
+            observables=(m.Reaction("reaction", "x1", 0), m.Position("y1", "y1", 1),
+                         m.Position("z1", "z1", 2), m.MeanStress("sigma_xx", 0, 0)))
+
+    def summarise(self, out: dict) -> dict:
+        """``stress``: axial reaction on X=a over the current section (mean lateral face
+        positions); ``nominal_stress``: reaction / a²; ``stress_particle_average``: Σ V J σ_xx /
+        Σ V J."""
+        a = self.size
+        R = np.asarray(out["reaction"], dtype=float)
+        steps = [str(x) for x in np.atleast_1d(out["status"])]
+        status = next((x for x in steps if not x.startswith("ok")), "ok")
+        return dict(strain=np.asarray(out["parameter"], dtype=float), status=status,
+                    step_status=steps,
+                    stress=R / (np.asarray(out["y1"]) * np.asarray(out["z1"])),
+                    nominal_stress=R / (a * a),
+                    stress_particle_average=np.asarray(out["sigma_xx"], dtype=float),
+                    wall_time=float(np.nanmax(out["wall_time"])),
+                    stress_measure="axial reaction on X=a over the current section (mean lateral "
+                                   "face positions)")
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """The displacement a (exp(ε) − 1) of a face at X = a for the logarithmic strain ε."""
+
+    a: float
+
+    def __call__(self, eps):
+        return self.a * np.expm1(np.asarray(eps, dtype=float))
+
 
 @dataclass(frozen=True)
 class Cantilever(Scene):
@@ -238,6 +152,31 @@ class Cantilever(Scene):
         """Tip force per unit thickness, N/m, for a dimensionless load P L²/(E I)."""
         return load * self.E * self.I / self.L ** 2
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """The beam [0, L] × [−H/2, H/2] and, behind it, a held block of ``clamp_layers``
+        particle spacings (the particle methods' clamp; the FEM clamps X = 0). The tip load is a
+        dead uniform shear traction −P/H on X = L, proportional to the load parameter P L²/(E I);
+        observed: the displacement of the tip mid-point (L, 0)."""
+        L, H = self.L, self.H
+        dx = H / 10 if spacing is None else spacing
+        back = self.clamp_layers * dx
+        return m.Model(
+            dim=2, plane=self.plane, length=H, name=self.name,
+            regions=(m.Region("clamp", Box((-back, -H / 2), (0.0, H / 2)), self.material,
+                              priority=1, held=True),
+                     m.Region("beam", Box((0.0, -H / 2), (L, H / 2)), self.material)),
+            sets=(m.Set("tip", Plane(0, L)), m.Set("tip_mid", Point((L, 0.0)))),
+            loads=(m.Traction("tip", (0.0, -self.force(1.0) / H), scale=m.Proportional(1.0)),),
+            drive=m.Static(tuple(float(p) for p in self.loads), "load", "-"),
+            observables=(m.Displacement("tip_y", "tip_mid", 1),
+                         m.Displacement("tip_x", "tip_mid", 0)))
+
+    def summarise(self, out: dict) -> dict:
+        """``tip_deflection`` (m, positive downward) and ``tip_horizontal`` (m, shortening)."""
+        return dict(load=np.asarray(out["parameter"], dtype=float),
+                    tip_deflection=-np.asarray(out["tip_y"], dtype=float),
+                    tip_horizontal=-np.asarray(out["tip_x"], dtype=float))
+
 
 @dataclass(frozen=True)
 class Plate(Scene):
@@ -273,5 +212,44 @@ class Plate(Scene):
     def c0(self) -> float:
         return math.sqrt(self.K / self.rho)
 
+    def model(self, spacing: float | None = None) -> m.Model:
+        """The plate [0, L] × [−H/2, H/2] and the held clamp block behind X = 0 (its length
+        rounded to whole spacings, at least one), the initial velocity of eq. 13 in the plate,
+        explicit dynamics over ``periods`` thin-plate periods; observed: the vertical
+        displacement of the tip mid-point (L, 0) and its period and amplitude."""
+        from .. import analytic
 
-SCENES = {"ss_curve": SSCurve, "cantilever": Cantilever, "plate": Plate}
+        L, H = self.L, self.H
+        dx = H / 10 if spacing is None else spacing
+        back = max(round(self.clamp_length / dx), 1) * dx
+        return m.Model(
+            dim=2, plane="strain", length=H, name=self.name,
+            regions=(m.Region("clamp", Box((-back, -H / 2), (0.0, H / 2)), self.material,
+                              priority=1, held=True),
+                     m.Region("plate", Box((0.0, -H / 2), (L, H / 2)), self.material)),
+            sets=(m.Set("tip", Point((L, 0.0))),),
+            loads=(m.InitialVelocity(PlateVelocity(self), regions=("plate",)),),
+            drive=m.Explicit(self.periods * analytic.plate_period(self), self.dt_factor),
+            observables=(m.Displacement("tip", "tip", 1), m.Period("period", "tip")))
+
+    def summarise(self, out: dict) -> dict:
+        """``period`` (s) and ``amplitude`` (m) of the tip, its history ``tip_displacement``."""
+        return dict(period=out.get("period", math.nan), amplitude=out.get("period_amplitude", math.nan),
+                    time=np.asarray(out.get("time", ())), tip_displacement=np.asarray(out.get("tip", ())))
+
+
+@dataclass(frozen=True)
+class PlateVelocity:
+    """v(X) = (0, V_f c0 f(X)/f(L)) of 004 eq. 13 (zero behind the clamp)."""
+
+    scene: Plate
+
+    def __call__(self, X):
+        from .. import analytic
+
+        v = np.zeros_like(X)
+        v[:, 1] = analytic.plate_initial_velocity(self.scene, X[:, 0])
+        return v
+
+
+

@@ -1,5 +1,5 @@
-"""Figures, read from the datasets only (never recomputed): references beside the computed curves,
-axes labelled with units."""
+"""The studies' figures, read from the datasets only (never recomputed): references beside the
+computed curves, axes labelled with units. :func:`save` is the one figure writer."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -17,7 +17,7 @@ STYLE = {"analytic": dict(color="k", lw=1.5, ls="-"),
          "sph": dict(color="tab:purple", marker="x", ms=4, ls="none")}
 
 
-def _save(fig, path) -> Path:
+def save(fig, path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
@@ -51,7 +51,7 @@ def ss_curve(ds, outdir) -> Path:
     for a in ax:
         a.grid(alpha=0.3)
         a.legend(fontsize=8)
-    return _save(fig, Path(outdir) / "ss_curve.png")
+    return save(fig, Path(outdir) / "ss_curve.png")
 
 
 def accuracy_vs_cost(rows: list[dict], title: str, path, error_label: str) -> Path:
@@ -71,7 +71,7 @@ def accuracy_vs_cost(rows: list[dict], title: str, path, error_label: str) -> Pa
     ax.set(xlabel="wall time [s]", ylabel=error_label, title=title)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def cantilever(ds, outdir) -> Path:
@@ -112,7 +112,7 @@ def cantilever(ds, outdir) -> Path:
     for a in ax:
         a.grid(alpha=0.3, which="both")
         a.legend(fontsize=7)
-    return _save(fig, Path(outdir) / "cantilever.png")
+    return save(fig, Path(outdir) / "cantilever.png")
 
 
 def plate(ds, outdir) -> Path:
@@ -145,4 +145,4 @@ def plate(ds, outdir) -> Path:
     for a in ax:
         a.grid(alpha=0.3, which="both")
         a.legend(fontsize=7)
-    return _save(fig, Path(outdir) / "plate.png")
+    return save(fig, Path(outdir) / "plate.png")

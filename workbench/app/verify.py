@@ -8,7 +8,10 @@ import time
 import numpy as np
 from pathlib import Path
 
-from . import plots, report, results
+from studies.figures import accuracy_vs_cost
+
+from .. import results
+from . import report
 
 log = logging.getLogger("workbench")
 
@@ -20,8 +23,10 @@ across H in the quick ladder, 8 in the full one; the modal-only rungs write noth
 
 def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None,
               scheduler: str | None = None, budget: float = 0.0, fields=False,
-              field_runs=None) -> dict:
+              field_runs=None, study=None) -> dict:
     """Run one study and write ``STUDY.nc`` and its figures; returns the report section.
+    ``study``: the study module (default ``studies.get(name)``; a user's scene runs with the
+    generic :mod:`studies.scene` and its own ``name``).
 
     With a ``budget`` (s), a solver's ladder is extended by one level at a time while its observed
     order is not settled and the predicted cost of the next level fits in what is left
@@ -38,7 +43,7 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     from studies import convergence
     from studies.common import ladder
 
-    study = studies.get(name)
+    study = studies.get(name) if study is None else study
     outdir = Path(outdir)
     field_dir = None
     field_kw = {}
@@ -56,6 +61,8 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     extended = []
     while budget > 0:
         left = budget - (time.perf_counter() - t0)
+        if not hasattr(study, "SOLVERS"):
+            break
         current = {s: ladder(s, resolutions, study, quick) for s in study.SOLVERS if s != "analytic"}
         grow = {}
         for s in current:
@@ -80,7 +87,7 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     rows = study.errors(ds)
     label = getattr(study, "ERROR_LABEL", "max relative error [-]")
     if rows:
-        figures.append(plots.accuracy_vs_cost(rows, f"{name}: accuracy against cost",
+        figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
                                               outdir / f"{name}_accuracy_vs_cost.png", label))
     gates = study.gates(ds)
     section = dict(name=name, gates=gates, rows=rows, figures=figures, error_label=label,
@@ -103,7 +110,7 @@ def field_section(study, written: str, field_dir: Path, outdir: Path, figures: l
     """Report the field series a study wrote: render one snapshot (appended to ``figures``) where
     this machine can, and return the notes — where the series are (open the .pvd in ParaView) and,
     without a snapshot, why none could be rendered."""
-    from . import fields
+    from .. import fields
 
     names = [n.strip() for n in written.split(",") if n.strip()]
     try:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scenes import ParameterError, with_overrides
+from ..scenes import ParameterError, with_overrides
 
 
 class UsageError(Exception):
@@ -29,38 +29,99 @@ def _parse_sets(items) -> dict[str, str]:
     return out
 
 
+def _print_parameters(scene_cls) -> None:
+    for p in scene_cls.parameters():
+        default = p["default"]
+        if isinstance(default, tuple):
+            default = ",".join(f"{d:g}" for d in default)
+        print(f"    {p['name']:<14} = {default!s:<22} [{p['units']}] {p['range']:<16} {p['doc']}")
+
+
 def cmd_list(args) -> int:
     import studies
 
+    if args.file:
+        cls = load_scene(args.file)
+        print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(cls()))}")
+        print(f"  {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
+        _print_parameters(cls)
+        return 0
     for name in studies.STUDIES:
         study = studies.get(name)
         print(f"{name}: solvers {', '.join(study.SOLVERS)}")
         print(f"  {(study.__doc__ or '').strip().splitlines()[0]}")
-        for p in study.SCENE.parameters():
-            default = p["default"]
-            if isinstance(default, tuple):
-                default = ",".join(f"{d:g}" for d in default)
-            print(f"    {p['name']:<14} = {default!s:<22} [{p['units']}] {p['range']:<16} {p['doc']}")
+        _print_parameters(study.SCENE)
+    print("A scene of your own: workbench run my_scene.py[:SceneClass] (README: 'Your own scene').")
     return 0
+
+
+def is_scene_file(name: str) -> bool:
+    return name.split(":")[0].endswith(".py")
+
+
+def load_scene(spec: str):
+    """The Scene class of a user's file: ``path.py`` (the one Scene subclass it defines) or
+    ``path.py:ClassName``. UsageError (one line) when it cannot be found."""
+    import importlib.util
+    import inspect
+
+    from ..scenes import Scene
+
+    path, _, cls_name = spec.partition(":")
+    p = Path(path)
+    if not p.is_file():
+        raise UsageError(f"scene file: {path!r} does not exist")
+    mod_name = f"workbench_user_scene_{abs(hash(str(p.resolve())))}"
+    spec_ = importlib.util.spec_from_file_location(mod_name, p)
+    mod = importlib.util.module_from_spec(spec_)
+    sys.modules[mod_name] = mod
+    try:
+        spec_.loader.exec_module(mod)
+    except Exception as err:
+        raise UsageError(f"scene file: {path} could not be loaded ({type(err).__name__}: {err})") from None
+    found = {n: c for n, c in vars(mod).items() if inspect.isclass(c) and issubclass(c, Scene)
+             and c is not Scene and c.__module__ == mod_name}
+    if cls_name:
+        if cls_name not in found:
+            raise UsageError(f"scene file: {path} defines no Scene subclass {cls_name!r} "
+                             f"(found: {', '.join(found) or 'none'})")
+        return found[cls_name]
+    if len(found) != 1:
+        raise UsageError(f"scene file: {path} defines {len(found)} Scene subclasses "
+                         f"({', '.join(found) or 'none'}); name one as {path}:ClassName")
+    return next(iter(found.values()))
+
+
+def _scene_solvers(scene) -> tuple:
+    from studies import scene as generic
+
+    return generic.solvers_for(scene.model())
 
 
 def _validated(args):
     import studies
     from studies.common import check_resolutions
 
-    try:
-        study = studies.get(args.study)
-    except ValueError as err:
-        raise UsageError(str(err)) from None
+    if is_scene_file(args.study):
+        from studies import scene as study
+
+        scene = with_overrides(load_scene(args.study)(), _parse_sets(args.set))
+        allowed = _scene_solvers(scene)
+    else:
+        try:
+            study = studies.get(args.study)
+        except ValueError as err:
+            raise UsageError(f"{err}; or a scene file (my_scene.py)") from None
+        scene = with_overrides(study.SCENE(), _parse_sets(args.set))
+        allowed = study.SOLVERS
     for s in args.solver or []:
-        if s not in study.SOLVERS:
+        if s not in allowed:
             raise UsageError(f"--solver: {s!r} is not supported by {args.study}; allowed: "
-                             f"{', '.join(study.SOLVERS)}")
+                             f"{', '.join(allowed)}")
     try:
         resolutions = check_resolutions(args.resolution) if args.resolution else None
     except ValueError as err:
         raise UsageError(str(err)) from None
-    scene = with_overrides(study.SCENE(), _parse_sets(args.set))
     return study, scene, resolutions
 
 
@@ -68,11 +129,12 @@ def cmd_run(args) -> int:
     from .verify import run_study
 
     study, scene, resolutions = _validated(args)
-    section = run_study(args.study, args.out, args.quick, solvers=args.solver,
+    name = scene.name if is_scene_file(args.study) else args.study
+    section = run_study(name, args.out, args.quick, solvers=args.solver,
                         resolutions=resolutions, scene=scene, scheduler=args.scheduler,
-                        budget=args.budget, fields=args.fields)
+                        budget=args.budget, fields=args.fields, study=study)
     ds = section["dataset"]
-    print(f"{args.study}: {Path(args.out) / (args.study + '.nc')}")
+    print(f"{name}: {Path(args.out) / (name + '.nc')}")
     if args.fields:
         series = [n.strip() for n in str(ds.attrs.get("field_series", "")).split(",") if n.strip()]
         print(f"  fields: {', '.join(str(Path(args.out) / 'fields' / n) for n in series) or 'none written'}")
@@ -81,11 +143,33 @@ def cmd_run(args) -> int:
               f"wall {r['wall_time']:.3f} s")
     for g in section["gates"]:
         print("  " + g.line())
+    if is_scene_file(args.study):
+        _print_observables(ds)
     bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel()
            if not (str(s).startswith("ok") or str(s) == "not run")]
     if bad:
         print(f"  failed runs: {sorted(set(bad))}")
     return 1 if bad else 0
+
+
+def _print_observables(ds) -> None:
+    """The last value of every observable of a scene run, per solver and resolution."""
+    axis = next((d for d in ("parameter", "time", "mode") if d in ds.dims), None)
+    names = [v for v in ds.data_vars if axis is not None and axis in ds[v].dims]
+    names += [v for v in ds.data_vars if ds[v].dims == ("solver", "resolution")
+              and v not in ("status", "wall_time", "n_particles")]
+    for s in ds.solver.values:
+        for r in ds.resolution.values:
+            st = str(ds.status.sel(solver=s, resolution=r).values)
+            if st == "not run":
+                continue
+            vals = []
+            for v in names:
+                y = np.atleast_1d(ds[v].sel(solver=s, resolution=r).values)
+                ok = y[np.isfinite(y)]
+                vals.append(f"{v} {ok[-1]:.5g} {ds[v].attrs.get('units', '')}" if ok.size else f"{v} -")
+            wall = float(ds.wall_time.sel(solver=s, resolution=r))
+            print(f"  {s:<5} resolution {int(r):<4} {st:<6} wall {wall:7.2f} s  " + "; ".join(vals))
 
 
 def cmd_verify(args) -> int:
@@ -95,19 +179,22 @@ def cmd_verify(args) -> int:
 
 
 def cmd_bench(args) -> int:
+    from studies import bench
+
     try:
-        from sph import bench
-    except ImportError:
-        raise UsageError("bench: the particle benchmark is not available in this build") from None
-    return bench.main(args)
+        return bench.main(args)
+    except bench.UsageError as err:
+        raise UsageError(str(err)) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="workbench", description=__doc__.splitlines()[0])
     p.add_argument("-v", "--verbose", action="store_true", help="log every run")
     sub = p.add_subparsers(dest="command", required=True)
-    sub.add_parser("list", help="studies, their solvers and parameters").set_defaults(fn=cmd_list)
-    r = sub.add_parser("run", help="run one study")
+    lp = sub.add_parser("list", help="studies, their solvers and parameters")
+    lp.add_argument("file", nargs="?", help="a scene file (my_scene.py[:SceneClass]): its parameters")
+    lp.set_defaults(fn=cmd_list)
+    r = sub.add_parser("run", help="run one study, or a scene file (my_scene.py[:SceneClass])")
     r.add_argument("study")
     r.add_argument("--solver", action="append", help="a method (repeatable)")
     r.add_argument("--resolution", action="append", type=int, help="particles/elements across (repeatable)")

@@ -1,9 +1,12 @@
-"""Throughput of the particle methods' time loops on the plate scene (contract: ``bench.nc``).
+"""The benchmark study: throughput of the particle methods' time loops on the plate scene
+(contract: ``bench.nc``; ``workbench bench``).
 
-:func:`particle_steps_per_second` builds the 2-D plate (004 D) at about ``n_particles`` particles,
-runs a few steps to compile (JIT warm-up, not timed), then times the explicit time loop alone —
-particles × steps / wall time. ``law='j2'`` swaps the plate's SVK rubber for the Table 1 steel
-(J2, history per particle) on the same particles, for the plastic throughput.
+:func:`particle_steps_per_second` builds the 2-D plate (004 D) at about ``n_particles`` particles
+the way the driver does (:func:`plate_body`), runs a few steps to compile (JIT warm-up, not timed),
+then times the method's time loop alone — particles × steps / wall time. ``law='j2'`` swaps the
+plate's SVK rubber for the Table 1 steel (J2, history per particle) on the same particles, for the
+plastic throughput. Each measurement runs in a fresh subprocess (``python -m studies.bench``), so
+that its peak memory is its own.
 """
 from __future__ import annotations
 
@@ -26,67 +29,77 @@ def plate_resolution(n_particles: int) -> int:
     return r
 
 
-def particle_steps_per_second(solver: str = "csph", n_particles: int = 100_000, threads: int = 1,
-                              steps: int | None = None, law: str = "svk", min_time: float = 2.0) -> dict:
-    """Time the plate's time loop of ``solver`` on ``threads`` numba threads.
+def plate_body(solver: str, n_particles: int, law: str = "svk", **options):
+    """The plate scene's body of ``solver`` at about ``n_particles`` particles, set up exactly as
+    the driver sets it up (model → particles → the method's build → loads and constraints) and
+    started: returns (body, dt, fixed (N, d) uint8, f_ext, v_fix, setup time). ``law='j2'`` swaps
+    the rubber for the Table 1 steel (J2, history per particle) on the same particles and raises
+    the initial velocity five-fold, so that the root of the plate yields within a short run."""
+    import dataclasses
 
-    Returns dict(particle_steps_per_second, n_particles, steps, loop_time, threads,
-    state_bytes_per_particle (the arrays the loop keeps: positions, velocities, neighbours,
-    corrected gradients, stress, history), peak_rss_bytes_per_particle (the process's peak
-    resident memory over N; includes the interpreter and the one-off neighbour search),
-    setup_time, law)."""
-    import numba
-
-    if solver != "csph":
-        raise ValueError(f"solver: {solver!r} is not benchmarked here; allowed: 'csph'")
-    if not (isinstance(threads, int) and 1 <= threads <= numba.config.NUMBA_NUM_THREADS):
-        raise ValueError(f"threads: {threads!r} is not allowed; 1..{numba.config.NUMBA_NUM_THREADS}")
-    from workbench.analytic import plate_initial_velocity
+    from sph import driver, particles
     from workbench.materials import TABLE1_STEEL
     from workbench.scenes import Plate
 
-    from . import csph, lattice
-    from .integrate import cfl_time_step
-
-    numba.set_num_threads(threads)
-    scene = Plate()
-    res = plate_resolution(int(n_particles))
-    t0 = time.perf_counter()
-    ps = lattice.plate(scene, res, mode="node")
-    mat = scene.material if law == "svk" else TABLE1_STEEL
     if law not in ("svk", "j2"):
         raise ValueError(f"law: {law!r} is not one of 'svk', 'j2'")
-    disc = csph.discretise(ps.X, ps.V, mat.rho, ps.dx, 1.1, "cubic_spline", csph.DEFAULT_CORRECTION)
-    body = csph.Body(disc, mat)
-    N = disc.n
-    fixed = np.zeros((N, 2), np.uint8)
-    fixed[ps.sets["fixed"]] = 1
-    v0 = np.zeros((N, 2))
-    v0[:, 1] = plate_initial_velocity(scene, disc.X[:, 0])
+    t0 = time.perf_counter()
+    scene = Plate()
+    res = plate_resolution(int(n_particles))
+    model, _ = driver.model_at(scene, res)
     if law == "j2":
-        v0 *= 5.0  # enough velocity to yield the root of the steel plate within the run
-    dt = cfl_time_step(ps.dx, mat.wave_speed("strain"), scene.dt_factor)
-    dyn = csph.Dynamics(body, v0, fixed, dt)
-    setup = time.perf_counter() - t0
-    dyn.advance(2)  # JIT warm-up (compiled code from the cache when warm)
+        model = dataclasses.replace(model, regions=tuple(dataclasses.replace(r, material=TABLE1_STEEL)
+                                                         for r in model.regions))
+    lattice = LATTICE.get(solver)
+    ps = particles.discretise(model, res, lattice)
+    body = driver.method_module(solver).build(ps, **options)
+    run = driver.Run(model, ps, body)
+    v0 = run.initial_velocity() * (5.0 if law == "j2" else 1.0)
+    f_ext = np.zeros_like(ps.X)
+    body.start(v0, f_ext)
+    dt = body.time_step(scene.dt_factor)
+    fixed = np.ascontiguousarray(run.fixed, dtype=np.uint8)
+    return body, dt, fixed, f_ext, np.zeros_like(ps.X), time.perf_counter() - t0
+
+
+LATTICE = {"sph": "cell"}
+"""The plate's lattice per method (classic SPH on the cell lattice, as in the plate study)."""
+
+
+def particle_steps_per_second(solver: str = "csph", n_particles: int = 100_000, threads: int = 1,
+                              steps: int | None = None, law: str = "svk", min_time: float = 2.0) -> dict:
+    """Time the plate's time loop of ``solver`` (its ``advance``: the fused compiled loop) on
+    ``threads`` numba threads, after two warm-up steps (JIT from the cache). Repeated until
+    ``min_time`` seconds of loop unless ``steps`` is given.
+
+    Returns dict(particle_steps_per_second, n_particles, steps, loop_time, threads, law,
+    peak_rss_bytes_per_particle (the process's peak resident memory over N; includes the
+    interpreter and the one-off neighbour search), setup_time, status)."""
+    import numba
+
+    from sph import METHODS
+
+    if solver not in METHODS:
+        raise ValueError(f"solver: {solver!r} is not a particle method; allowed: {', '.join(METHODS)}")
+    if not (isinstance(threads, int) and 1 <= threads <= numba.config.NUMBA_NUM_THREADS):
+        raise ValueError(f"threads: {threads!r} is not allowed; 1..{numba.config.NUMBA_NUM_THREADS}")
+    numba.set_num_threads(threads)
+    body, dt, fixed, f_ext, v_fix, setup = plate_body(solver, n_particles, law)
+    N = body.n
+    body.advance(2, dt, f_ext, fixed, v_fix)  # JIT warm-up (compiled code from the cache when warm)
     n = steps or max(10, int(2e6 / N))
-    total, loop = 0, 0.0
+    total, loop, done = 0, 0.0, n
     while loop < min_time or total == 0:
         tl = time.perf_counter()
-        _, bad = dyn.advance(n)
+        done = body.advance(n, dt, f_ext, fixed, v_fix)
         loop += time.perf_counter() - tl
-        total += n
-        if steps:
+        total += done
+        if steps or done < n:
             break
-    state = disc.nbytes() + sum(a.nbytes for a in (dyn.x, dyn.v, dyn.acc, dyn.fixed, dyn.v_fix,
-                                                    dyn.f_ext, body.VP, body.history,
-                                                    dyn.h_scratch, body.status))
     return dict(particle_steps_per_second=N * total / loop, n_particles=N, steps=total,
                 loop_time=loop, threads=threads, law=law,
-                state_bytes_per_particle=state / N, peak_rss_bytes_per_particle=_rss_bytes() / N,
-                setup_time=setup, numba_threading_layer=numba.threading_layer(),
-                status="ok" if bad < 0 else f"unstable: material point failed at step {bad}")
-
+                peak_rss_bytes_per_particle=_rss_bytes() / N, setup_time=setup,
+                status="ok" if done == n else f"unstable: material point failed after {total} steps")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -131,22 +144,10 @@ def _timeout(n_particles: int) -> float:
 
 
 def _run_solver(solver: str, n_particles: int, threads: int, steps: int | None = None) -> dict:
-    """One solver's own bench function, normalised to the keys of :func:`particle_steps_per_second`."""
+    """:func:`particle_steps_per_second` with the threading layer noted."""
     import numba
 
-    if solver == "csph":
-        out = particle_steps_per_second("csph", n_particles, threads, steps=steps)
-    elif solver == "hpm":  # fixed step counts there: enough steps for about 2 s of loop
-        from . import hpm
-
-        out = hpm.bench(n_particles, threads, steps=steps or max(100, int(1e7 / n_particles)))
-    elif solver == "sph":
-        from . import classic
-
-        out = classic.bench(n_particles, threads, steps=steps or max(20, int(2e6 / n_particles)))
-    else:
-        raise ValueError(f"solver: {solver!r} is unknown; allowed: {', '.join(SOLVERS)}")
-    out = dict(out)
+    out = dict(particle_steps_per_second(solver, n_particles, threads, steps=steps))
     out.setdefault("status", "ok")
     try:
         out.setdefault("numba_threading_layer", numba.threading_layer())
@@ -159,7 +160,7 @@ def _child_measure(solver: str, n_particles: int, threads: int) -> dict:
     """Body of ``python -m sph.bench --one``: import, note the baseline memory, run, report."""
     import numba
 
-    from . import classic, csph, hpm  # noqa: F401  (imports belong to the baseline)
+    from sph import classic, csph, driver, hpm  # noqa: F401  (imports belong to the baseline)
     from workbench import analytic, scenes  # noqa: F401
 
     baseline = _current_rss_bytes()
@@ -179,13 +180,13 @@ def _child_startup(solver: str, n_particles: int) -> dict:
 
 
 def _subprocess(argv: list[str], timeout: float) -> tuple[dict | None, str]:
-    """Run ``python -m sph.bench ARGV``; return (the JSON it printed last, status)."""
+    """Run ``python -m studies.bench ARGV``; return (the JSON it printed last, status)."""
     import json
     import subprocess
     import sys
 
     try:
-        proc = subprocess.run([sys.executable, "-m", "sph.bench", *argv], capture_output=True,
+        proc = subprocess.run([sys.executable, "-m", "studies.bench", *argv], capture_output=True,
                               text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         return None, f"error: timed out after {timeout:.0f} s"
@@ -225,9 +226,11 @@ def startup_time(solver: str, n_particles: int, timeout: float | None = None) ->
     return {"startup_time": res["warm"], "cold_startup_time": res["cold"], "status": "ok"}
 
 
-def _validate(args) -> tuple[list[str], list[int], list[int]]:
-    from workbench.cli import UsageError
+class UsageError(ValueError):
+    """A bad ``workbench bench`` argument (the CLI prints it as one line, exit status 2)."""
 
+
+def _validate(args) -> tuple[list[str], list[int], list[int]]:
     cores = _machine_cores()
     solvers = list(dict.fromkeys(args.solver or SOLVERS))
     for s in solvers:
@@ -261,7 +264,7 @@ def _load_average() -> str:
 def main(args) -> int:
     """``workbench bench``: time each (solver, particles, threads) in a subprocess, write
     ``OUT/bench.nc`` and ``OUT/bench.png``, print a table. Exit status 0 (also when some runs
-    failed: a failure is a recorded result); usage errors raise ``workbench.cli.UsageError``."""
+    failed: a failure is a recorded result); usage errors raise :class:`UsageError`."""
     import os
     from pathlib import Path
 
@@ -410,14 +413,14 @@ def plot(ds, path):
     ax.set_title(f"plate time loop, {ds.attrs.get('cpu_model', '')}"[:70], fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    from workbench.plots import _save
+    from .figures import save
 
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def _cli(argv: list[str]) -> int:
-    """``python -m sph.bench --one SOLVER N THREADS`` / ``--startup SOLVER N`` (one JSON line), or
-    the legacy ``python -m sph.bench [N] [threads…]`` (csph, SVK and J2)."""
+    """``python -m studies.bench --one SOLVER N THREADS`` / ``--startup SOLVER N`` (one JSON line),
+    or ``python -m studies.bench [N] [threads…]`` (csph, SVK and J2)."""
     import json
 
     if argv and argv[0] == "--one":
@@ -436,7 +439,7 @@ def _cli(argv: list[str]) -> int:
     return 0
 
 
-if __name__ == "__main__":  # python -m sph.bench --one … | --startup … | [N] [threads…]
+if __name__ == "__main__":  # python -m studies.bench --one … | --startup … | [N] [threads…]
     import sys
 
     sys.exit(_cli(sys.argv[1:]))

@@ -1,0 +1,462 @@
+"""The one particle driver: any scene model, any particle method, one run.
+
+``solve(method, scene, resolution, **options)``:
+
+1. **discretise** — ``scene.model()`` at the spacing ``length / resolution``
+   (:func:`sph.particles.discretise`: regions → particles with a material row, a body and a held
+   flag each; named sets → particle indices and probes);
+2. **build** the method's body (:data:`sph.METHODS`; ``options`` go to its ``build``);
+3. **loads and constraints** — held particles and clamps fix every DOF, rollers (symmetry planes)
+   one, prescribed motion moves DOFs; tractions, pressures, point and body forces become dead
+   particle forces f_ext (a particle's share of a surface load is its boundary area on that surface);
+4. **drive** — :class:`~workbench.scenes.model.Static`: Newton on the gradient form with load
+   stepping (:mod:`sph.static`); :class:`~workbench.scenes.model.Modal`: the eigenproblem
+   K φ = ω² M φ of the same tangent about X with lumped masses; :class:`~workbench.scenes.model.Explicit`:
+   the method's fused time loop in chunks (contact: the generic velocity Verlet with the method's
+   force plus :mod:`sph.contact`), loads that vary in time updated at chunk midpoints (chunks of at
+   most :data:`MAX_CHUNK_VARYING` steps then);
+5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`;
+6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
+   energies, field snapshots (``fields=<folder>``) between chunks; the scene's
+   :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
+
+Returns a dict: ``status`` (or one per load value), ``parameter`` / ``time``, every observable by
+name (an array over the load values or records), energies, ``wall_time`` (the run's cost, set-up
+included; static: cumulative at each load value), ``loop_time`` (explicit: the time loop alone),
+``setup_time``, ``n_particles``, ``dt``, ``steps``, and the scene's quantities.
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import math
+import time
+
+import numpy as np
+
+from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
+from workbench.scenes import model as M
+from workbench.scenes.params import SceneError
+
+from . import METHODS
+from .diagnostics import linear_momentum, period_amplitude
+from .monitor import Disorder, energy_change
+from .particles import Particles, discretise
+
+MAX_CHUNK_VARYING = 20
+"""Longest chunk of steps (over which loads are held at their mid-chunk value) when a load or a
+prescribed motion varies in time."""
+
+
+@contextlib.contextmanager
+def threads_for(n_particles: int):
+    """One numba thread for a body under :data:`sph.total_lagrangian.SERIAL_BELOW` particles
+    (waking the thread pool for every small parallel loop costs more than the loop), the
+    configured threads otherwise."""
+    import numba
+
+    from .total_lagrangian import SERIAL_BELOW
+
+    nt = numba.get_num_threads()
+    if n_particles < SERIAL_BELOW:
+        numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(nt)
+
+
+def method_module(name: str):
+    """The module of the particle method ``name`` (:data:`sph.METHODS`)."""
+    if name not in METHODS:
+        raise ValueError(f"solver: {name!r} is not a particle method; allowed: {', '.join(METHODS)}")
+    return importlib.import_module(METHODS[name])
+
+
+def model_at(scene, resolution: int):
+    """The scene's model at the spacing of ``resolution`` (geometry may depend on it, e.g. a
+    clamp of a whole number of particle layers) and that spacing."""
+    if not (isinstance(resolution, (int, np.integer)) and resolution >= 1):
+        raise SceneError(f"resolution: {resolution!r} is not allowed; an integer >= 1")
+    length = scene.model().length
+    dx = length / int(resolution)
+    return scene.model(dx), dx
+
+
+def solve(method: str, scene, resolution: int, lattice: str | None = None, fields=None,
+          field_frames: int = DEFAULT_FRAMES, drive=None, static: str = "newton",
+          **options) -> dict:
+    """Run the particle method ``method`` on ``scene`` at ``resolution`` (module docstring).
+    ``lattice`` overrides the model's ('node' or 'cell'); ``drive`` replaces the model's (e.g.
+    ``Modal()`` for the linearised periods of a dynamic scene); ``static``: 'newton' (default) or
+    'dr' (dynamic relaxation, for the cost comparison); ``fields`` (a folder, or None) writes the
+    ParaView series ``<scene>_<method>_H<resolution>.pvd``; the other ``options`` go to the
+    method's ``build``."""
+    import dataclasses
+
+    t0 = time.perf_counter()
+    mod = method_module(method)
+    model, _ = model_at(scene, resolution)
+    if drive is not None:
+        model = dataclasses.replace(model, drive=drive)
+    ps = discretise(model, int(resolution), lattice)
+    body = mod.build(ps, **options)
+    run = Run(model, ps, body)
+    snap_name = series_name(scene.name, method, resolution)
+    with threads_for(ps.n):
+        if isinstance(model.drive, M.Static):
+            out = run.static(fields, snap_name, t0, static)
+        elif isinstance(model.drive, M.Modal):
+            out = run.modal()
+        else:
+            out = run.explicit(fields, snap_name, field_frames, t0)
+    out.setdefault("n_particles", int(ps.n))
+    out["n_free"] = int(np.count_nonzero(~run.fixed.all(axis=1)))
+    out["plane"] = model.plane
+    out["lattice"] = ps.lattice
+    if isinstance(model.drive, type(scene.model().drive)):
+        out.update(scene.summarise(out))
+    return out
+
+
+class Run:
+    """The loads, constraints and observables of a model on a particle body."""
+
+    def __init__(self, model: M.Model, ps: Particles, body):
+        self.model = model
+        self.ps = ps
+        self.body = body
+        N, d = ps.n, ps.dim
+        fixed = np.zeros((N, d), bool)
+        fixed[ps.held] = True
+        self.prescribed = []
+        for c in model.constraints:
+            idx = ps.sets[c.set]
+            if isinstance(c, M.Clamp):
+                fixed[idx] = True
+            else:
+                fixed[idx, c.axis] = True
+                if isinstance(c, M.Prescribed):
+                    self.prescribed.append(c)
+        self.fixed = fixed
+        self.varying = bool(self.prescribed) or any(
+            not isinstance(getattr(ld, "scale", 1.0), (int, float)) and
+            not (isinstance(ld.scale, M.Table) and len(ld.scale.times) == 1)
+            for ld in model.loads if hasattr(ld, "scale"))
+
+    # -- loads ---------------------------------------------------------------------------------
+    def dead_forces(self, at: float) -> np.ndarray:
+        """f_ext (N, d), N, of the dead loads at the load parameter / time ``at``."""
+        ps = self.ps
+        f = np.zeros((ps.n, ps.dim))
+        for ld in self.model.loads:
+            if isinstance(ld, M.InitialVelocity):
+                continue
+            s = float(M.as_function(ld.scale)(at))
+            if isinstance(ld, M.Traction):
+                idx = ps.sets[ld.set]
+                f[idx] += s * np.outer(ps.surface_area(ld.set), np.asarray(ld.traction, float))
+            elif isinstance(ld, M.Pressure):
+                idx = ps.sets[ld.set]
+                f[idx] -= s * ld.pressure * ps.normals[idx]
+            elif isinstance(ld, M.PointLoad):
+                idx, w = ps.probes[ld.set] if ld.set in ps.probes else (
+                    ps.sets[ld.set], np.full(len(ps.sets[ld.set]), 1.0 / len(ps.sets[ld.set])))
+                np.add.at(f, idx, s * np.outer(w, np.asarray(ld.force, float)))
+            elif isinstance(ld, M.BodyForce):
+                sel = ps.in_regions(ld.regions)
+                f[sel] += s * np.outer(self.body.m[sel], np.asarray(ld.acceleration, float))
+        return f
+
+    def initial_velocity(self) -> np.ndarray:
+        ps = self.ps
+        v = np.zeros((ps.n, ps.dim))
+        for ld in self.model.loads:
+            if isinstance(ld, M.InitialVelocity):
+                sel = ps.in_regions(ld.regions) & ~ps.held
+                vel = ld.velocity
+                v[sel] = vel(ps.X[sel]) if callable(vel) else np.asarray(vel, float)
+        v[self.fixed] = 0.0
+        return v
+
+    def prescribed_targets(self, lam: float) -> np.ndarray:
+        """Positions of the fixed DOFs at the load parameter λ (static drives), (N, d)."""
+        x = self.ps.X.copy()
+        for c in self.prescribed:
+            x[self.ps.sets[c.set], c.axis] += float(M.as_function(c.displacement)(lam))
+        return x
+
+    def prescribed_velocity(self, t: float, dt: float) -> np.ndarray:
+        """v_fix (N, d) at time t (explicit drives): the prescribed velocity, or the displacement's
+        difference quotient over [t − dt/2, t + dt/2]."""
+        v = np.zeros((self.ps.n, self.ps.dim))
+        for c in self.prescribed:
+            if c.velocity is not None:
+                val = float(M.as_function(c.velocity)(t))
+            else:
+                u = M.as_function(c.displacement)
+                val = float((u(t + 0.5 * dt) - u(t - 0.5 * dt)) / dt)
+            v[self.ps.sets[c.set], c.axis] = val
+        return v
+
+    # -- observables ---------------------------------------------------------------------------
+    def observe(self, x, force=None, state=None) -> dict:
+        """The model's observables at positions x; ``force`` the total force f_int + f_ext (N, d)
+        for reactions; ``state`` a field state for stresses and damage."""
+        ps = self.ps
+        out = {}
+        for o in self.model.observables:
+            if isinstance(o, M.Displacement):
+                if o.set in ps.probes:
+                    idx, w = ps.probes[o.set]
+                    out[o.name] = float(w @ (x[idx, o.axis] - ps.X[idx, o.axis]))
+                else:
+                    idx = ps.sets[o.set]
+                    V = ps.V[idx]
+                    out[o.name] = float(V @ (x[idx, o.axis] - ps.X[idx, o.axis]) / V.sum())
+            elif isinstance(o, M.Position):
+                out[o.name] = float(np.mean(x[ps.sets[o.set], o.axis]))
+            elif isinstance(o, M.Reaction):
+                out[o.name] = math.nan if force is None else -float(force[ps.sets[o.set], o.axis].sum())
+            elif isinstance(o, M.MeanStress):
+                out[o.name] = self._mean_stress(o, state)
+            elif isinstance(o, M.FailedFraction):
+                out[o.name] = self._failed_fraction(o, state)
+        return out
+
+    def _mean_stress(self, o, state) -> float:
+        from workbench.materials import evaluate
+
+        if state is None:
+            return math.nan
+        sel = self.ps.in_regions(o.regions)
+        if "sigma" in state:
+            sig = np.asarray(state["sigma"])
+            J = np.asarray(state.get("J", np.ones(self.ps.n)))
+        else:
+            F = np.ascontiguousarray(state["F"])
+            sig = evaluate(self.ps.table, F, state["history"], stress="sigma",
+                           mat_id=self.ps.mat_id)["stress"]
+            J = np.linalg.det(F)
+        w = self.ps.V[sel] * J[sel]
+        return float(np.sum(w * sig[sel, o.i, o.j]) / np.sum(w))
+
+    def _failed_fraction(self, o, state) -> float:
+        from workbench.materials import HIST_DAMAGE
+
+        sel = self.ps.in_regions(o.regions)
+        if state is None or state.get("history") is None or state["history"].shape[1] <= HIST_DAMAGE:
+            return 0.0
+        j2 = np.array([m.law == "j2" for m in self.ps.table.materials])[self.ps.mat_id]
+        failed = j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+        return float(np.count_nonzero(failed[sel]) / max(1, np.count_nonzero(sel)))
+
+    # -- static --------------------------------------------------------------------------------
+    def static(self, fields, snap_name, t0, method: str = "newton") -> dict:
+        from .static import Constraints, solve_path
+
+        tlb = self.body.gradient_form()
+        if tlb is None:
+            raise ValueError(f"drive: {self.body.name} has no static solver (a static scene needs "
+                             "a gradient-form method: csph or hpm)")
+        drive = self.model.drive
+        path = np.asarray(drive.path, dtype=float)
+        names = [o.name for o in self.model.observables]
+        out = dict(parameter=path, parameter_name=drive.parameter,
+                   wall_time=np.full(len(path), np.nan), iterations=np.zeros(len(path), int),
+                   **{n: np.full(len(path), np.nan) for n in names})
+        snap = Snapshots.open(fields, snap_name, self.ps.X, self.ps.table,
+                              lambda: dict(self.body.field_state(), t=state["lam"]),
+                              len(path), 1, max(1, len(path)))
+        state = dict(lam=0.0)
+
+        def constraints_at(lam):
+            return Constraints(self.fixed, self.dead_forces(lam)), self.prescribed_targets(lam)
+
+        def on_equilibrium(k, lam, x, its):
+            self.body.x[:] = x
+            f = tlb.evaluate(x) + self.dead_forces(lam)
+            st = self.body.field_state()
+            for n, v in self.observe(x, f, st).items():
+                out[n][k] = v
+            out["iterations"][k] = its
+            out["wall_time"][k] = time.perf_counter() - t0
+            if snap:
+                state["lam"] = lam
+                snap(k + 1)
+
+        out["status"] = solve_path(tlb, self.ps.X.copy(), path, constraints_at, on_equilibrium,
+                                   method=method)
+        return out
+
+    # -- modal ---------------------------------------------------------------------------------
+    def modal(self) -> dict:
+        import scipy.sparse as sp
+        import scipy.sparse.linalg as spla
+
+        t0 = time.perf_counter()
+        tlb = self.body.gradient_form()
+        if tlb is None:
+            raise ValueError(f"drive: {self.body.name} has no modal solve (a gradient-form method: "
+                             "csph or hpm)")
+        _, A = tlb.evaluate(self.ps.X.copy(), tangent=True)
+        K = tlb.tangent(A)
+        free = ~self.fixed.ravel()
+        Kf = K[free][:, free].tocsc()
+        Mm = sp.diags(np.repeat(self.body.m, self.ps.dim)[free]).tocsc()
+        w2 = spla.eigsh(Kf, k=self.model.drive.n_modes, M=Mm, sigma=0, which="LM",
+                        return_eigenvectors=False)
+        periods = np.sort(2 * np.pi / np.sqrt(np.abs(w2)))[::-1]
+        return dict(periods=periods, period=float(periods[0]), status="ok",
+                    wall_time=time.perf_counter() - t0)
+
+    # -- explicit ------------------------------------------------------------------------------
+    def explicit(self, fields, snap_name, field_frames, t0) -> dict:
+        drive = self.model.drive
+        body, ps = self.body, self.ps
+        dt = body.time_step(drive.dt_factor)
+        n_steps = int(math.ceil(drive.t_end / dt))
+        chunk = max(1, n_steps // drive.n_out)
+        if self.varying:
+            chunk = min(chunk, MAX_CHUNK_VARYING)
+        fixed = np.ascontiguousarray(self.fixed, dtype=np.uint8)
+        f_ext = self.dead_forces(0.0)
+        v_fix = self.prescribed_velocity(0.0, dt) if self.prescribed else np.zeros_like(ps.X)
+        contact = self._contact_setup()
+        extra = None
+        if contact is not None:
+            from .contact import contact_forces
+
+            def extra(x):
+                return contact_forces(x, ps.body, *contact)[0]
+        body.start(self.initial_velocity(), f_ext, extra)
+        dis = None
+        if drive.disorder is not None:
+            mask = None
+            if drive.disorder_set is not None:
+                mask = np.zeros(ps.n, bool)
+                mask[ps.sets[drive.disorder_set]] = True
+            dis = Disorder(ps.X, ps.dx, body=ps.body if len(ps.body_names) > 1 else None, mask=mask)
+        snap = Snapshots.open(fields, snap_name, ps.X, ps.table, body.field_state, n_steps, chunk,
+                              field_frames)
+        names = [o.name for o in self.model.observables if not isinstance(o, M.Period)]
+        rec = {n: [] for n in names}
+        times, kes, ses, bal, dh, mom = [], [], [], [], [], []
+        diag = {}
+        w_ext = 0.0
+
+        def energy_total():
+            ke, se = body.energies()
+            ce = 0.0
+            if contact is not None:
+                from .contact import contact_forces
+
+                ce = contact_forces(body.x, ps.body, *contact)[1]
+            return ke, se + ce
+
+        def record():
+            for n, v in self.observe(body.x, None, None).items():
+                rec[n].append(v)
+            ke, se = energy_total()
+            times.append(body.t)
+            for n, v in body.diagnostics().items():
+                diag.setdefault(n, []).append(v)
+            kes.append(ke)
+            ses.append(se)
+            bal.append(ke + se - w_ext)
+            mom.append(linear_momentum(body.m, body.v))
+
+        record()
+        e0 = bal[0]
+        scale0 = abs(kes[0] + ses[0])
+        e_scale = scale0
+        if dis is not None:
+            dh.append(dis(body.x)[0])
+        if snap:
+            snap(0)
+        status, criterion = "ok", "none"
+        t_loop = 0.0
+        t_setup = time.perf_counter() - t0
+        every_dis = max(1, drive.n_out // 50)
+        while body.steps < n_steps:
+            k = min(chunk, n_steps - body.steps)
+            if self.varying:
+                tm = body.t + 0.5 * k * dt
+                f_new = self.dead_forces(tm)
+                if self.prescribed:
+                    v_fix = self.prescribed_velocity(tm, dt)
+            else:
+                f_new = f_ext
+            x_before = body.x.copy()
+            tl0 = time.perf_counter()
+            done = body.advance(k, dt, f_new, fixed, v_fix, drive.damping, extra)
+            t_loop += time.perf_counter() - tl0
+            w_ext += float(np.sum(f_new * (body.x - x_before)))
+            f_ext = f_new
+            if done < k or not np.isfinite(body.x).all():
+                criterion = "non-finite"
+                why = "material point failed (J <= 0 or return mapping)" if body.failed() else "non-finite state"
+                status = f"unstable: {why} at t={body.t:.6g} s"
+                break
+            record()
+            if snap:
+                snap(body.steps)
+            if drive.energy_growth is not None:
+                e_scale = max(e_scale, abs(kes[-1] + ses[-1]))
+                grew, change = energy_change(e0, bal[-1], e_scale, drive.energy_growth)
+                if grew:
+                    criterion = "energy"
+                    status = f"unstable: energy balance grew by {change:+.3g} at t={body.t:.4g} s"
+                    break
+            if dis is not None:
+                d95 = dis(body.x)[0] if (len(times) - 1) % every_dis == 0 or body.steps >= n_steps else dh[-1]
+                dh.append(d95)
+                if d95 > drive.disorder:
+                    criterion = "disorder"
+                    status = (f"unstable: particle disorder eta95 = {d95:.3g} > {drive.disorder} "
+                              f"at t={body.t:.4g} s")
+                    break
+        if snap:
+            snap(body.steps, final=True)
+        t = np.asarray(times)
+        out = dict(time=t, status=status, criterion=criterion, dt=dt, steps=int(body.steps),
+                   wall_time=time.perf_counter() - t0, loop_time=t_loop, setup_time=t_setup,
+                   n_particles=int(ps.n),
+                   kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
+                   energy_history=np.asarray(bal), external_work=w_ext,
+                   linear_momentum=np.asarray(mom),
+                   particle_steps_per_second=ps.n * body.steps / t_loop if t_loop > 0 else math.nan)
+        for n in names:
+            out[n] = np.asarray(rec[n])
+        for n, v in diag.items():
+            out[n] = np.asarray(v)
+        e = np.asarray(bal)
+        drift = float((e[-1] - e[0]) / e_scale) if e_scale > 0 else math.nan
+        if drive.energy_growth is None:
+            drift = math.nan
+        out["energy_drift"] = drift
+        out["dissipated"] = max(0.0, -drift) if math.isfinite(drift) else math.nan
+        tol = drive.energy_growth if drive.energy_growth is not None else math.inf
+        out["note"] = (f"dissipated {100 * out['dissipated']:.3g} % of the initial energy"
+                       if status == "ok" and out["dissipated"] > tol else "")
+        for o in self.model.observables:
+            if isinstance(o, M.Period):
+                T, A = period_amplitude(t, out[o.of]) if status == "ok" else (math.nan, math.nan)
+                if status != "ok":
+                    A = math.nan
+                out[o.name] = T
+                out[f"{o.name}_amplitude"] = A
+        if dis is not None:
+            ok_x = np.isfinite(body.x).all()
+            d95, dmax = dis(body.x) if ok_x else (math.nan, math.nan)
+            out.update(stable=status == "ok", disorder=d95, disorder_max=dmax,
+                       min_spacing=dis.min_spacing(body.x) if ok_x else math.nan,
+                       disorder_history=np.asarray(dh), x=body.x.copy(), X=ps.X.copy())
+        return out
+
+    # -- contact: the generic velocity Verlet ---------------------------------------------------
+    def _contact_setup(self):
+        if not self.model.contact:
+            return None
+        c = self.model.contact[0]
+        return (c.distance if c.distance is not None else self.ps.dx, c.stiffness)

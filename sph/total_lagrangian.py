@@ -1,0 +1,476 @@
+"""The total-Lagrangian gradient form shared by CSPH (paper 000) and, for its statics and the
+integration-consistent variant, HPM (paper 004): everything that follows from
+
+    F_a = Σ_b (x_b − x_a) ⊗ G_ab                         (000 eq. 35, difference form)
+
+with G_ab a gradient per neighbour pair fixed in the reference configuration, and the internal
+force derived from the stored energy Π = Σ_a V_a ψ(F_a) (000 eq. 7–24 in total-Lagrangian form):
+
+    f_a = −∂Π/∂x_a = Σ_b (V_a P_a G_ab − V_b P_b G_ba)    (:func:`internal_force`).
+
+Π is invariant under rigid translations and rotations, so Σ f = 0 and Σ x × f = 0 to round-off:
+linear and angular momentum are conserved (eq. 16–28). The tangent K = ∂²Π/∂x∂x is symmetric
+(:func:`tangent_matrix`), which the static Newton (:mod:`sph.static`) and the modal solve use.
+
+* :class:`Discretisation` — reference positions, volumes, masses, CSR pairs, G_ab and G_ba;
+* :func:`deformation_gradients`, :func:`stress_pass`, :func:`internal_force` — one evaluation;
+* :class:`Body` — a discretisation with its materials (a :class:`~workbench.materials.MaterialTable`
+  row per particle) and history, evaluated x ↦ (f, dP/dF);
+* :func:`advance` — ``n`` velocity-Verlet steps fused into one compiled loop (stress, force,
+  kicks and drift per particle), the explicit time loop of csph.
+
+Held particles (a clamp block) enter F of their neighbours through their positions; with
+``V_energy`` their integration volume may differ from the volume that gives their mass (zero for a
+clamp modelled as such: it then adds no elastic layer).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numba import njit, prange
+
+from workbench.materials import MaterialTable
+from workbench.materials.kernels import material_point, material_points, svk_point
+
+from .integrate import kick_drift_row, kick_row
+from .kernels import JIT, N_CHUNKS
+
+FASTMATH = {"contract", "arcp"}
+"""LLVM flags of the time loop: fused multiply–add and reciprocal multiplication only (no
+reassociation, so sums keep their order and the conservation tests hold to round-off)."""
+
+SERIAL_BELOW = 20_000
+"""Particle count under which the time loop runs on one thread: a step of a small body is
+shorter than the cost of waking the thread pool several times per step (on a loaded 2-core
+machine two threads made a 400-particle plate 50× slower)."""
+
+
+@dataclass
+class Discretisation:
+    """The reference-configuration data of a gradient-form body.
+
+    X (N, d) m; V (N,) integration volumes, m^d; m (N,) kg; h m (kernel scale, for information);
+    kernel name; indptr/indices CSR neighbours; G, GT (nnz, d) the gradients G_ab and G_ba, 1/m;
+    L (N, d, d) the correction matrices where they exist (eq. 31); ok (N,) the gradient regular."""
+
+    X: np.ndarray
+    V: np.ndarray
+    m: np.ndarray
+    h: float
+    kernel: str
+    indptr: np.ndarray
+    indices: np.ndarray
+    G: np.ndarray
+    GT: np.ndarray
+    L: np.ndarray
+    ok: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.X.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.X.shape[1]
+
+    def nbytes(self) -> int:
+        return sum(a.nbytes for a in (self.X, self.V, self.m, self.indptr, self.indices, self.G,
+                                      self.GT))
+
+
+# ================================================================================================
+# Deformation gradient (eq. 35), stress (shared material routine), internal force
+# ================================================================================================
+
+@njit(inline="always", **JIT)
+def _deformation_gradient_row(a, x, indptr, indices, G, F):
+    """Eq. 35: F_a = Σ_b (x_b − x_a) ⊗ G_ab into the 3×3 F (F33 = 1 in 2-D)."""
+    d = x.shape[1]
+    for i in range(3):
+        for j in range(3):
+            F[i, j] = 0.0
+    if d == 2:
+        F[2, 2] = 1.0
+    for p in range(indptr[a], indptr[a + 1]):
+        b = indices[p]
+        for i in range(d):
+            dxi = x[b, i] - x[a, i]
+            for j in range(d):
+                F[i, j] += dxi * G[p, j]
+
+
+@njit(parallel=True, **JIT)
+def deformation_gradients(x, indptr, indices, G):
+    """Eq. 35 for every particle, (N, 3, 3)."""
+    N = x.shape[0]
+    F = np.empty((N, 3, 3))
+    for a in prange(N):
+        _deformation_gradient_row(a, x, indptr, indices, G, F[a])
+    return F
+
+
+@njit(inline="always", **JIT)
+def _stress_row(a, x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, F, P, A, h_new,
+                VP, F_all, A_all, status):
+    """F_a (eq. 35) → P_a by the shared material routine (row ``mat_id[a]`` of the parameter
+    table) → VP_a = V_a P_a (d×d block). Also J_a > 0 is checked (status 1000 otherwise)."""
+    d = x.shape[1]
+    _deformation_gradient_row(a, x, indptr, indices, G, F)
+    J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
+         - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
+         + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+    if not (J > 0.0):
+        status[a] = 1000
+        for i in range(d):
+            for j in range(d):
+                VP[a, i, j] = 0.0
+        return
+    st = material_point(F, h_old[a], prm[mat_id[a]], P, h_new[a], A, want_tangent)
+    status[a] = st
+    for i in range(d):
+        for j in range(d):
+            VP[a, i, j] = V[a] * P[i, j]
+    if F_all.shape[0] > 0:
+        for i in range(3):
+            for j in range(3):
+                F_all[a, i, j] = F[i, j]
+    if want_tangent:
+        for i in range(d):
+            for j in range(d):
+                for k in range(d):
+                    for l in range(d):
+                        A_all[a, i, j, k, l] = A[i, j, k, l]
+
+
+@njit(parallel=True, **JIT)
+def stress_pass(x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, VP, h_new, F_all,
+                A_all, status):
+    """:func:`_stress_row` over all particles, in chunks that allocate their scratch once.
+
+    prm (n_mat, N_PARAMS) the material table, mat_id (N,) its rows; VP (N, d, d) out: V_a P_a;
+    h_new (N, nh) out; F_all (N, 3, 3) or (0, 3, 3): F out if non-empty; A_all (N, d, d, d, d)
+    or empty: dP/dF out when ``want_tangent``; status (N,) int64 out."""
+    N = x.shape[0]
+    chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    for c in prange(N_CHUNKS):
+        F = np.empty((3, 3))
+        P = np.empty((3, 3))
+        A = np.empty((3, 3, 3, 3))
+        for a in range(c * chunk, min(N, (c + 1) * chunk)):
+            _stress_row(a, x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, F, P, A,
+                        h_new, VP, F_all, A_all, status)
+
+
+@njit(inline="always", **JIT)
+def _force_row(a, VP, indptr, indices, G, GT, f):
+    """f_a = Σ_b (V_a P_a G_ab − V_b P_b G_ba) = −∂Π/∂x_a, written into f[a]."""
+    d = f.shape[1]
+    for i in range(d):
+        f[a, i] = 0.0
+    for p in range(indptr[a], indptr[a + 1]):
+        b = indices[p]
+        for i in range(d):
+            s = 0.0
+            for j in range(d):
+                s += VP[a, i, j] * G[p, j] - VP[b, i, j] * GT[p, j]
+            f[a, i] += s
+
+
+@njit(parallel=True, **JIT)
+def internal_force(VP, indptr, indices, G, GT):
+    """f_a = −Σ_b (V_b P_b G_ba − V_a P_a G_ab) for every particle, (N, d), N (N/m in 2-D)."""
+    N, d = VP.shape[0], VP.shape[1]
+    f = np.empty((N, d))
+    for a in prange(N):
+        _force_row(a, VP, indptr, indices, G, GT, f)
+    return f
+
+
+class Body:
+    """A gradient-form body: discretisation, materials (``table`` and a row ``mat_id`` per
+    particle) and history, with the evaluation x ↦ (F, P, f) used by every driver.
+
+    ``hourglass`` (:mod:`sph.hourglass`, dimensionless α ≥ 0; 0: off) adds the energy-consistent
+    zero-energy-mode control of csph."""
+
+    def __init__(self, disc: Discretisation, table, mat_id=None, history=None,
+                 hourglass: float = 0.0):
+        from .hourglass import hourglass_stiffness
+
+        self.disc = disc
+        self.table = MaterialTable.of(table)
+        N = disc.n
+        self.mat_id = (np.zeros(N, np.int64) if mat_id is None
+                       else np.ascontiguousarray(mat_id, dtype=np.int64))
+        self.hourglass = float(hourglass)
+        if not (self.hourglass >= 0 and math.isfinite(self.hourglass)):
+            raise ValueError(f"hourglass: {hourglass} is not allowed; the coefficient must be >= 0")
+        self.K_hg = (hourglass_stiffness(disc, self.hourglass, self.table.mu)
+                     if self.hourglass > 0 else None)
+        self.prm = self.table.params()
+        d = disc.dim
+        self.history = (self.table.initial_history(self.mat_id) if history is None
+                        else np.ascontiguousarray(history, dtype=np.float64))
+        self.history_trial = self.history.copy()
+        self.VP = np.zeros((N, d, d))
+        self.F = np.zeros((N, 3, 3))
+        self.status = np.zeros(N, np.int64)
+        self._noA = np.zeros((0, d, d, d, d))
+
+    @property
+    def material(self):
+        """The material of a one-material body (the table's first row)."""
+        return self.table[0]
+
+    def evaluate(self, x, tangent: bool = False):
+        """Internal forces f (N, d) at positions x from the committed history; fills self.F,
+        self.VP, self.history_trial, self.status; with ``tangent`` returns (f, A) with A the
+        (N, d, d, d, d) block of dP/dF."""
+        dsc = self.disc
+        A = np.zeros((dsc.n,) + (dsc.dim,) * 4) if tangent else self._noA
+        stress_pass(x, dsc.indptr, dsc.indices, dsc.G, dsc.V, self.history, self.prm, self.mat_id,
+                    tangent, self.VP, self.history_trial, self.F, A, self.status)
+        f = internal_force(self.VP, dsc.indptr, dsc.indices, dsc.G, dsc.GT)
+        if self.K_hg is not None:
+            f -= self.K_hg @ x
+        return (f, A) if tangent else f
+
+    def tangent(self, A) -> sp.csr_matrix:
+        """∂²(Π + Π_hg)/∂x∂x, (N d × N d)."""
+        K = tangent_matrix(self.disc, A)
+        if self.K_hg is not None:
+            K = (K + sp.kron(self.K_hg, sp.identity(self.disc.dim), format="csr")).tocsr()
+        return K
+
+    def commit(self):
+        """Accept the last evaluation's history (end of a converged load step or time step)."""
+        self.history[:] = self.history_trial
+
+    def stress(self, kind: str = "sigma"):
+        """Stress of the last evaluation, (N, 3, 3): 'P', 'tau' or 'sigma' (Cauchy), Pa."""
+        P, _, _ = material_points(np.ascontiguousarray(self.F), self.history, self.prm, self.mat_id)
+        if kind == "P":
+            return P
+        tau = np.einsum("nij,nkj->nik", P, self.F)
+        if kind == "tau":
+            return tau
+        return tau / np.linalg.det(self.F)[:, None, None]
+
+
+# ================================================================================================
+# Tangent stiffness K = ∂²Π/∂x∂x (static Newton, modal solve)
+# ================================================================================================
+
+@njit(parallel=True, **JIT)
+def _assemble_tangent(indptr, indices, G, V, A, offsets, rows, cols, vals):
+    """COO triplets of K_(c k),(e l) = Σ_a V_a Σ_jm g_ac,j A_a[k,j,l,m] g_ae,m with the stencil of a
+    {a} ∪ nbrs(a) and g_ab = G_ab, g_aa = −Σ_b G_ab (∂F_a/∂x_c = I ⊗ g_ac)."""
+    N = indptr.shape[0] - 1
+    d = G.shape[1]
+    for a in prange(N):
+        n = indptr[a + 1] - indptr[a] + 1
+        g = np.empty((n, d))
+        ids = np.empty(n, np.int64)
+        ids[0] = a
+        for k in range(d):
+            g[0, k] = 0.0
+        for q in range(1, n):
+            p = indptr[a] + q - 1
+            ids[q] = indices[p]
+            for k in range(d):
+                g[q, k] = G[p, k]
+                g[0, k] -= G[p, k]
+        pos = offsets[a]
+        for s in range(n):
+            for t in range(n):
+                for k in range(d):
+                    for l in range(d):
+                        v = 0.0
+                        for j in range(d):
+                            for m in range(d):
+                                v += g[s, j] * A[a, k, j, l, m] * g[t, m]
+                        rows[pos] = ids[s] * d + k
+                        cols[pos] = ids[t] * d + l
+                        vals[pos] = V[a] * v
+                        pos += 1
+
+
+def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
+    """The symmetric Hessian ∂²Π/∂x∂x = −∂f/∂x, (N d × N d) CSR, from dP/dF blocks A (N, d,d,d,d)."""
+    d = disc.dim
+    n = np.diff(disc.indptr) + 1
+    sizes = (n * n) * d * d
+    offsets = np.zeros(disc.n + 1, np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    nnz = int(offsets[-1])
+    rows = np.empty(nnz, np.int64)
+    cols = np.empty(nnz, np.int64)
+    vals = np.empty(nnz)
+    _assemble_tangent(disc.indptr, disc.indices, disc.G, disc.V, A, offsets, rows, cols, vals)
+    K = sp.csr_matrix((vals, (rows, cols)), shape=(disc.n * d, disc.n * d))
+    K.sum_duplicates()
+    return K
+
+
+# ================================================================================================
+# Explicit dynamics: fused stress / force / velocity-Verlet loop
+# ================================================================================================
+
+@njit(parallel=True, fastmath=FASTMATH, **JIT)
+def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, indices, G, GT, V,
+             h_a, h_b, prm, mat_id, all_svk, VP, status, hg_indptr, hg_indices, hg_data):
+    """``n_steps`` velocity-Verlet steps from the synchronised state (x, v, acc):
+    kick–drift; F → P (shared material routine) → V P; force → acceleration → kick.
+    ``h_a`` holds the committed history on entry and on exit (``h_b`` is scratch). The hourglass
+    stiffness K_s (CSR arrays, empty when off) adds −K_s x to the force. Returns the first step
+    with a failed material point (status ≠ 0) or −1."""
+    N, d = x.shape
+    chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    dummyF = np.zeros((0, 3, 3))
+    dummyA = np.zeros((0, d, d, d, d))
+    hg_on = hg_indptr.shape[0] > 1
+    # Without hourglass control the force loop reads no positions, so the next step's
+    # kick–drift is fused into it (one pass less over the particles); the last step of the call
+    # stops at the synchronised state.
+    fuse = not hg_on
+    for a in prange(N):
+        kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
+    for s in range(n_steps):
+        nbad = 0
+        for c in prange(N_CHUNKS):
+            F = np.zeros((3, 3))
+            P = np.empty((3, 3))
+            A = np.empty((3, 3, 3, 3))
+            for a in range(c * chunk, min(N, (c + 1) * chunk)):
+                if d == 2:
+                    nbad += _stress_row_2d(a, x, indptr, indices, G, V, h_a, prm, mat_id, all_svk,
+                                           F, P, A, h_b, VP, status)
+                else:
+                    _stress_row(a, x, indptr, indices, G, V, h_a, prm, mat_id, False, F, P, A,
+                                h_b, VP, dummyF, dummyA, status)
+                    nbad += status[a] != 0
+        last = s == n_steps - 1 or nbad > 0
+        drift_here = fuse and not last
+        for a in prange(N):
+            # f_a = Σ_b (V_a P_a G_ab − V_b P_b G_ba); a = (f + f_ext)/m; second half kick
+            if d == 2:
+                _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, acc)
+            else:
+                _force_row(a, VP, indptr, indices, G, GT, acc)
+                for i in range(d):
+                    acc[a, i] += f_ext[a, i]
+            if hg_on:
+                for i in range(d):
+                    for q in range(hg_indptr[a], hg_indptr[a + 1]):
+                        acc[a, i] -= hg_data[q] * x[hg_indices[q], i]
+            ma = 1.0 / m[a]
+            for i in range(d):
+                acc[a, i] *= ma
+            kick_row(a, v, acc, fixed, v_fix, dt, damping)
+            if drift_here:
+                kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
+        if h_a.shape[1] > 0:
+            for a in prange(N):
+                for k in range(h_a.shape[1]):
+                    h_a[a, k] = h_b[a, k]
+        if nbad > 0:
+            return s
+        if not fuse and not last:
+            for a in prange(N):
+                kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
+    return -1
+
+
+@njit(inline="always", **JIT)
+def _stress_row_2d(a, x, indptr, indices, G, V, h_old, prm, mat_id, all_svk, F, P, A, h_new, VP,
+                   status):
+    """2-D specialisation of :func:`_stress_row` (scalar accumulation of eq. 35, F33 = 1; a body
+    of Saint Venant–Kirchhoff materials calls that law directly from the shared library, others go
+    through ``material_point``). Returns 1 if the point failed, else 0."""
+    xa0 = x[a, 0]
+    xa1 = x[a, 1]
+    f00 = 0.0
+    f01 = 0.0
+    f10 = 0.0
+    f11 = 0.0
+    for p in range(indptr[a], indptr[a + 1]):
+        b = indices[p]
+        d0 = x[b, 0] - xa0
+        d1 = x[b, 1] - xa1
+        g0 = G[p, 0]
+        g1 = G[p, 1]
+        f00 += d0 * g0
+        f01 += d0 * g1
+        f10 += d1 * g0
+        f11 += d1 * g1
+    F[0, 0] = f00
+    F[0, 1] = f01
+    F[1, 0] = f10
+    F[1, 1] = f11
+    F[2, 2] = 1.0
+    if not (f00 * f11 - f01 * f10 > 0.0):
+        status[a] = 1000
+        VP[a, 0, 0] = 0.0
+        VP[a, 0, 1] = 0.0
+        VP[a, 1, 0] = 0.0
+        VP[a, 1, 1] = 0.0
+        return 1
+    if all_svk:
+        st = svk_point(F, prm[mat_id[a]], P, A, False)
+    else:
+        st = material_point(F, h_old[a], prm[mat_id[a]], P, h_new[a], A, False)
+    status[a] = st
+    va = V[a]
+    VP[a, 0, 0] = va * P[0, 0]
+    VP[a, 0, 1] = va * P[0, 1]
+    VP[a, 1, 0] = va * P[1, 0]
+    VP[a, 1, 1] = va * P[1, 1]
+    return 1 if st != 0 else 0
+
+
+@njit(inline="always", **JIT)
+def _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, out):
+    """2-D specialisation of :func:`_force_row` plus the external force, into ``out[a]``."""
+    pa00 = VP[a, 0, 0]
+    pa01 = VP[a, 0, 1]
+    pa10 = VP[a, 1, 0]
+    pa11 = VP[a, 1, 1]
+    f0 = f_ext[a, 0]
+    f1 = f_ext[a, 1]
+    for p in range(indptr[a], indptr[a + 1]):
+        b = indices[p]
+        g0 = G[p, 0]
+        g1 = G[p, 1]
+        h0 = GT[p, 0]
+        h1 = GT[p, 1]
+        f0 += pa00 * g0 + pa01 * g1 - VP[b, 0, 0] * h0 - VP[b, 0, 1] * h1
+        f1 += pa10 * g0 + pa11 * g1 - VP[b, 1, 0] * h0 - VP[b, 1, 1] * h1
+    out[a, 0] = f0
+    out[a, 1] = f1
+
+
+def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: float,
+            n_steps: int, h_scratch) -> int:
+    """``n_steps`` fused velocity-Verlet steps of ``body`` from the synchronised state (x, v, acc),
+    in place; ``f_ext`` (N, d) dead forces, ``fixed`` (N, d) uint8 DOFs following ``v_fix``.
+    Bodies under :data:`SERIAL_BELOW` particles run on one thread. Returns the steps completed
+    (fewer when a material point failed: J ≤ 0 or the return mapping)."""
+    import numba
+
+    dsc = body.disc
+    K = body.K_hg
+    hg = ((K.indptr.astype(np.int64), K.indices.astype(np.int64), K.data)
+          if K is not None else (np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0)))
+    nt = numba.get_num_threads()
+    if dsc.n < SERIAL_BELOW:
+        numba.set_num_threads(1)
+    try:
+        bad = _advance(n_steps, x, v, acc, dsc.m, f_ext, fixed, v_fix, dt, damping, dsc.indptr,
+                       dsc.indices, dsc.G, dsc.GT, dsc.V, body.history, h_scratch, body.prm,
+                       body.mat_id, body.table.all_svk, body.VP, body.status, *hg)
+    finally:
+        numba.set_num_threads(nt)
+    return n_steps if bad < 0 else int(bad) + 1

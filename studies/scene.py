@@ -1,0 +1,173 @@
+"""The generic study: any scene model (a user's own, ``workbench run my_scene.py``) with the methods
+that can run it, over a resolution ladder, its observables stored as a dataset.
+
+A scene written with the scene API (:mod:`workbench.scenes.model`; README "Your own scene") needs no
+study module of its own: this one runs it with every requested method, stores each observable of
+the model against the load parameter (static drive), the time (explicit drive, on a common grid of
+the drive's ``n_out`` + 1 points) or the mode number (modal drive), with the energies of explicit
+runs, and plots them. A headline scene (with references and gates) gets a study module of its own.
+"""
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from workbench import results
+from workbench.scenes import model as M
+
+from .common import check_resolutions
+from .sweep import Task, run_tasks
+
+NAME = "scene"
+SCENE = None
+RESOLUTIONS = (5, 10, 20)
+QUICK_RESOLUTIONS = (5, 10)
+ERROR_LABEL = "no reference"
+
+
+def solvers_for(model: M.Model) -> tuple:
+    """The methods that can run ``model``: the gradient-form particle methods (static, modal and
+    explicit drives), classic SPH for explicit drives, the FEM where it reads scene models."""
+    from sph import METHODS
+
+    out = [m for m in METHODS if m != "sph" or isinstance(model.drive, M.Explicit)]
+    try:
+        import fem_reference
+
+        if hasattr(fem_reference, "solve_model"):
+            out.insert(0, "fem")
+    except ImportError:  # pragma: no cover
+        pass
+    return tuple(out)
+
+
+def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: str | None = None,
+        fields=None, field_runs=None) -> xr.Dataset:
+    """Run ``scene`` with ``solvers`` (default: :func:`solvers_for`) at ``resolutions`` (a list,
+    or a dict solver -> list; default :data:`RESOLUTIONS`, or :data:`QUICK_RESOLUTIONS`)."""
+    model = scene.model()
+    allowed = solvers_for(model)
+    solvers = list(solvers or allowed)
+    for s in solvers:
+        if s not in allowed:
+            raise ValueError(f"solver: {s!r} cannot run scene '{scene.name}' ({type(model.drive).__name__} "
+                             f"drive); allowed: {', '.join(allowed)}")
+    default = QUICK_RESOLUTIONS if quick else RESOLUTIONS
+    ladders = {s: check_resolutions(resolutions.get(s, default) if isinstance(resolutions, dict)
+                                    else (resolutions or default)) for s in solvers}
+    tasks = [Task.make(s, scene, r, **({"fields": str(fields)} if fields is not None and
+                                       (field_runs is None or (s, r) in field_runs) else {}))
+             for s, lad in ladders.items() for r in lad]
+    outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, scene.name)))
+    all_res = sorted({r for lad in ladders.values() for r in lad})
+    shp = (len(solvers), len(all_res))
+    status = np.full(shp, "not run", dtype=object)
+    wall = np.full(shp, np.nan)
+    npart = np.zeros(shp, np.int64)
+    drive = model.drive
+    obs = [o for o in model.observables if not isinstance(o, M.Period)]
+    if isinstance(drive, M.Static):
+        axis = ("parameter", np.asarray(drive.path, float),
+                {"units": drive.units, "long_name": drive.parameter})
+    elif isinstance(drive, M.Explicit):
+        axis = ("time", np.linspace(0.0, drive.t_end, drive.n_out + 1), {"units": "s"})
+    else:
+        axis = ("mode", np.arange(1, drive.n_modes + 1), {"units": "-"})
+    n_ax = len(axis[1])
+    series = {o.name: np.full(shp + (n_ax,), np.nan) for o in obs}
+    if isinstance(drive, M.Explicit):
+        series.update(kinetic_energy=np.full(shp + (n_ax,), np.nan),
+                      stored_energy=np.full(shp + (n_ax,), np.nan))
+    if isinstance(drive, M.Modal):
+        series["period"] = np.full(shp + (n_ax,), np.nan)
+    scalars = {}
+    for p in (o for o in model.observables if isinstance(o, M.Period)):
+        scalars[p.name] = np.full(shp, np.nan)
+        scalars[f"{p.name}_amplitude"] = np.full(shp, np.nan)
+    for i, s in enumerate(solvers):
+        for r in ladders[s]:
+            j = all_res.index(r)
+            out = outs[(s, r)]
+            st = out.get("status", "error: no status")
+            status[i, j] = st if isinstance(st, str) else _summary(st)
+            wall[i, j] = float(np.nanmax(np.atleast_1d(out.get("wall_time", np.nan))))
+            npart[i, j] = int(out.get("n_particles", out.get("n_dof", 0)))
+            for name, arr in series.items():
+                src = {"stored_energy": "strain_energy", "period": "periods"}.get(name, name)
+                if src not in out:
+                    continue
+                y = np.asarray(out[src], float)
+                if isinstance(drive, M.Explicit) and "time" in out and len(out["time"]) == len(y):
+                    arr[i, j] = np.interp(axis[1], out["time"], y, right=np.nan)
+                elif len(y) == n_ax:
+                    arr[i, j] = y
+            for name, arr in scalars.items():
+                arr[i, j] = float(out.get(name, np.nan))
+    dims = ("solver", "resolution")
+    data = {"status": (dims, status.astype(str), {"units": "-"}),
+            "wall_time": (dims, wall, {"units": "s"}),
+            "n_particles": (dims, npart, {"units": "-", "long_name": "particles or degrees of freedom"})}
+    units = {M.Displacement: "m", M.Position: "m", M.Reaction: "N", M.MeanStress: "Pa",
+             M.FailedFraction: "-"}
+    for o in obs:
+        data[o.name] = (dims + (axis[0],), series[o.name],
+                        {"units": units.get(type(o), "-"), "long_name": repr(o)})
+    for name in ("kinetic_energy", "stored_energy", "period"):
+        if name in series:
+            data[name] = (dims + (axis[0],), series[name], {"units": "s" if name == "period" else "J"})
+    for name, arr in scalars.items():
+        data[name] = (dims, arr, {"units": "m" if name.endswith("amplitude") else "s"})
+    ds = xr.Dataset(data, coords={"solver": solvers, "resolution": all_res,
+                                  axis[0]: (axis[0], axis[1], axis[2])})
+    ds.attrs.update(results.provenance(scene.name, scene))
+    ds.attrs.update(model.describe())
+    ds.attrs["plane"] = str(model.plane)
+    return ds
+
+
+def _summary(statuses) -> str:
+    statuses = [str(s) for s in statuses]
+    return "ok" if all(s.startswith("ok") for s in statuses) else next(
+        s for s in statuses if not s.startswith("ok"))
+
+
+def gates(ds) -> list:
+    """A user's scene has no reference, hence no gate."""
+    return []
+
+
+def errors(ds) -> list:
+    return []
+
+
+def plot(ds, outdir) -> list:
+    """Every observable against the load parameter, time or mode, one line per solver and
+    resolution."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from pathlib import Path
+
+    from .figures import STYLE, save
+
+    axis = next(d for d in ("parameter", "time", "mode") if d in ds.dims)
+    names = [v for v in ds.data_vars if axis in ds[v].dims]
+    if not names:
+        return []
+    fig, axes = plt.subplots(1, len(names), figsize=(4.6 * len(names), 3.8), squeeze=False)
+    for ax, v in zip(axes[0], names):
+        for s in ds.solver.values:
+            for r in ds.resolution.values:
+                y = ds[v].sel(solver=s, resolution=r).values
+                if np.all(np.isnan(y)):
+                    continue
+                st = dict(STYLE.get(str(s), {}))
+                st["ls"] = "-"
+                ax.plot(ds[axis].values, y, label=f"{s} ({int(r)})", **st)
+        ax.set_xlabel(f"{ds[axis].attrs.get('long_name', axis)} [{ds[axis].attrs.get('units', '-')}]")
+        ax.set_ylabel(f"{v} [{ds[v].attrs.get('units', '-')}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(ds.attrs.get("study", ""), fontsize=10)
+    return [save(fig, Path(outdir) / f"{ds.attrs.get('study', 'scene')}.png")]
