@@ -246,6 +246,11 @@ class Discretisation:
         nf = len(self.free)
         return sp.csr_matrix((data, self._indices, self._indptr), shape=(nf, nf))
 
+    def element_matvec(self, Ke: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """K v (N,) for the full (uncondensed) matrix of the element matrices Ke and v (N,)."""
+        fe = np.einsum("emn,en->em", Ke, v[self.edofs])
+        return np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=self.N)
+
     # -- F-bar ---------------------------------------------------------------------------------
     def fbar_kinematics(self, H: np.ndarray) -> dict:
         """F, J, J̄, α = (J̄/J)^{1/d} and H̄ = F̄ − I at the points from H (nel·nqp, d, d)."""
@@ -264,6 +269,10 @@ class Discretisation:
     def fbar_tangent(self, kin: dict, P_bar: np.ndarray, A_bar: np.ndarray) -> sp.csr_matrix:
         """The condensed F-bar tangent (module docstring) from the kinematics of
         :meth:`fbar_kinematics` and P, A = ∂P/∂F evaluated at F̄ (nel·nqp, d, d[, d, d])."""
+        return self.assemble_elements(self.fbar_element_tangent(kin, P_bar, A_bar))
+
+    def fbar_element_tangent(self, kin: dict, P_bar: np.ndarray, A_bar: np.ndarray) -> np.ndarray:
+        """The element matrices (nel, nb·d, nb·d) of the F-bar tangent (:meth:`fbar_tangent`)."""
         d, nb, nel, nqp = self.d, self.nb, self.nel, self.nqp
         F, J, Jbar, alpha = kin["F"], kin["J"], kin["Jbar"], kin["alpha"]
         FinvT = np.swapaxes(np.linalg.inv(F), 1, 2)
@@ -280,7 +289,7 @@ class Discretisation:
                       (J[:, None, None] * FinvT).reshape(nel, nqp, d, d), optimize=True)
         Ke += np.einsum("eqm,eqp,epn->emn", R.reshape(nel, nqp, nb * d), self.Pi,
                         S.reshape(nel, nqp, nb * d), optimize=True)
-        return self.assemble_elements(Ke)
+        return Ke
 
     # -- the same with scikit-fem forms (reference implementation) -----------------------------
     def skfem_internal_force(self, P: np.ndarray) -> np.ndarray:

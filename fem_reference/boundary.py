@@ -147,8 +147,15 @@ class Loads:
         return self.vector(self.disc.pressure_load(self._facets(where), float(p)), scale)
 
     def point(self, x, force, scale=None) -> np.ndarray:
-        """Point force ``force`` (d,) (N; N/m in 2-D) on the node at x (d,)."""
-        return self.vector(self.disc.point_load(x, force), scale)
+        """Point force ``force`` (d,) (N; N/m in 2-D) at the point x (d,) of the reference
+        configuration: the consistent nodal forces N_a(x) force of the element containing x (on
+        a node, the force on that node alone)."""
+        x = np.asarray(x, dtype=float).reshape(1, -1)
+        force = np.asarray(force, dtype=float)
+        if force.shape != (self.disc.d,):
+            raise ValueError(f"force: a force has {self.disc.d} components, got {force.shape}")
+        # probe (d·1, N): row i interpolates component i; its transpose spreads a force
+        return self.vector(self.disc.probe(x).T @ force, scale)
 
     def body(self, rho, g, scale=None) -> None:
         """Body force ρ g per unit reference volume; ``rho`` (kg/m³) a number or one per element

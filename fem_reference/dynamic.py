@@ -23,7 +23,9 @@ from .static import Problem, TangentSolver, commit, newton
 def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
             rtol: float = 1e-10, maxit: int = 20, snapshot=None, callback=None):
     """Advance from u = 0 (the prescribed values of the fixed DOFs at t = 0) with initial velocity
-    v0 (N,) for ``n_steps`` steps of ``dt``.
+    v0 (N,) for ``n_steps`` steps of ``dt``. On the fixed DOFs v0 must be the rate of the
+    prescribed motion at t = 0 (zero on a clamp): the consistent mass couples their acceleration
+    into the free DOFs.
 
     ``observe(u)`` returns the scalar (or array) recorded each step (e.g. a tip displacement);
     ``snapshot(step, t, u, v)`` (optional) is called at the start and after every step (field
@@ -38,8 +40,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     state = problem.initial_state()
     state.u[disc.fixed] = problem.prescribed(0.0)
     u = state.u.copy()
-    v = v0.copy()
-    v[disc.fixed] = 0.0
+    v = np.array(v0, dtype=float)
     a = np.zeros(disc.N)
     pt0 = problem.evaluate(u, state, tangent=False)
     r0 = problem.external(0.0) - pt0["f_int"]

@@ -126,15 +126,23 @@ def in_boxes(x: np.ndarray, boxes) -> np.ndarray:
     return inside
 
 
-def boxes_mesh(boxes, h: float):
+def boxes_mesh(boxes, h: float, inside=None):
     """Structured mesh (MeshHex in 3-D, MeshQuad in 2-D) of the union of axis-aligned ``boxes``
     ((lo, hi) pairs): the tensor grid of :func:`grid_lines`, restricted to the elements whose
     centroid lies in the union, unused vertices removed. Every box face is a grid plane, so the
-    union is meshed exactly and conformingly."""
+    union is meshed exactly and conformingly.
+
+    ``inside(x (d, n)) -> bool (n,)``, when given, replaces the union as the test on the element
+    centroids: the boxes then only place the grid lines (e.g. the bounding boxes of shapes that
+    are not unions of boxes — a staircase approximation of their boundary — or the boxes of
+    several regions with a held one left out)."""
     lines = grid_lines(boxes, h)
     full = _tensor(lines)
     centroids = full.p[:, full.t].mean(axis=1)
-    keep = np.flatnonzero(in_boxes(centroids, boxes))
+    test = (lambda c: in_boxes(c, boxes)) if inside is None else inside
+    keep = np.flatnonzero(np.asarray(test(centroids), dtype=bool))
+    if not len(keep):
+        raise ValueError("inside: no element centroid lies in the body")
     if len(keep) == full.t.shape[1]:
         return full
     return full.restrict(keep)

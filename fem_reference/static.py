@@ -6,13 +6,23 @@ parameter λ, and the external force f_ext(λ). Its state (u, history and F33 at
 committed only at a converged load step, so that a failed step is retried from the last converged
 state with a smaller increment.
 
-Element deletion (``Problem(..., deletion=True)``, for fracture): after every committed step an
-element whose points have all reached the damage D ≥ 1 of the J2 law (history column
-``HIST_DAMAGE``; such a point already carries no stress) is deleted
+Element deletion (``Problem(..., deletion=True)``, for fracture): after every committed step the
+elements that meet the failure criterion on the damage D of the J2 law (history column
+``HIST_DAMAGE``; a point with D ≥ 1 carries no stress, 000 eq. 36) are deleted
 (:meth:`~fem_reference.assembly.Discretisation.deactivate`): no force, stiffness or mass from then
 on; the DOFs that no active element touches are held at their current displacement so that the
-tangent stays regular. The criterion "all points" rather than "the centroid" makes a deletion
-change nothing but the regularity of the system: the material had already released the element.
+tangent stays regular. Criterion (``deletion``):
+
+- ``'any'`` (``True``, the default): D ≥ 1 at any point of the element. An element with some
+  failed points is under-integrated — it has zero-energy modes that nothing controls — so it must
+  not outlive the step in which its first point failed: with ``'all'`` the micro-cantilever of
+  :func:`fem_reference.drivers.solve_micro_cantilever` diverges at the first partly failed
+  elements (inverted elements in the line search), with ``'any'`` it runs through to separation.
+  The element's other points lose their stress one step early: the usual price of erosion (the
+  crack is one element wide either way).
+- ``'all'``: D ≥ 1 at every point; deleting then changes nothing but the regularity of the
+  system (the material had already released the element). For homogeneous states.
+
 Points with D ≥ 1 in the committed state are not evaluated (their stress and tangent are zero
 and their F, which nothing resists, may be inverted). Within a Newton iteration a DOF whose every
 point has just failed has an empty row; its diagonal is set to a positive value (its residual is
@@ -58,8 +68,8 @@ class Problem:
     ``f_ext(λ)`` holds the distributed loads (tractions, pressures, body forces;
     :class:`fem_reference.boundary.Loads`); ``point_loads``, a sequence of (x (d,), force (d,))
     pairs, adds point forces on the nodes at x, scaled by λ like f_ext. The element formulation
-    (standard or F-bar) is the discretisation's (``disc.fbar``). ``deletion``: delete failed
-    elements (module docstring)."""
+    (standard or F-bar) is the discretisation's (``disc.fbar``). ``deletion``: False, True (=
+    'any'), 'any' or 'all': delete failed elements by that criterion (module docstring)."""
 
     disc: Discretisation
     material: Material | MaterialTable
@@ -68,7 +78,7 @@ class Problem:
     f_ext: Callable[[float], np.ndarray]  # λ -> (N,)
     point_loads: tuple = ()
     mat_id: np.ndarray | None = None
-    deletion: bool = False
+    deletion: bool | str = False
 
     def __post_init__(self):
         disc = self.disc
@@ -88,6 +98,11 @@ class Problem:
             self._f_point = sum(disc.point_load(x, f) for x, f in self.point_loads)
         if disc.fbar is not None and disc.d == 2 and self.plane != "strain":
             raise ValueError(f"plane: F-bar in 2-D needs plane strain, not {self.plane!r}")
+        if self.deletion is True:
+            self.deletion = "any"
+        if self.deletion not in (False, None, "any", "all"):
+            raise ValueError(f"deletion: {self.deletion!r} is not one of False, True, 'any', "
+                             "'all'")
         if self.deletion and self.table.n_history <= HIST_DAMAGE:
             raise ValueError("deletion: needs a damage history (a J2 material in the table)")
         self.dirichlet = disc.fixed.copy()  # the DOFs fixed_values() answers for
@@ -95,6 +110,16 @@ class Problem:
         self.held_values = np.zeros(0)
 
     # -- data per element ------------------------------------------------------------------------
+    @property
+    def force_floor(self) -> float:
+        """The smallest force scale of Newton's relative residual, N (N/m in 2-D): the force of a
+        strain of 1e-6 on a cross-section of the body, 1e-6 E_max V^{(d−1)/d} (V the reference
+        volume). A body that carries nothing (unloaded, or broken) then converges at a residual
+        1e-6 rtol of that instead of chasing round-off relative to zero."""
+        disc = self.disc
+        E = max(m.E for m in self.table.materials)
+        return 1e-6 * E * float(disc.dV0.sum()) ** ((disc.d - 1) / disc.d)
+
     def rho(self) -> np.ndarray:
         """Density of each element (nel,), kg/m³."""
         return self.table.rho(self.mat_id)
@@ -191,13 +216,17 @@ class Problem:
         out["f_int"] = disc.internal_force(out["P"]) if out["ok"] else None
         return out
 
-    def tangent(self, pt: dict) -> sp.csr_matrix:
-        """The condensed tangent K_ff at the point state ``pt`` of :meth:`evaluate` (a DOF with an
-        empty row — all its points failed within this step — gets a positive diagonal)."""
+    def element_tangent(self, pt: dict) -> np.ndarray:
+        """Element tangent matrices (nel, nb·d, nb·d) at the point state ``pt``."""
         if self.disc.fbar is not None:
-            K = self.disc.fbar_tangent(pt["fbar"], pt["P_bar"], pt["A"])
-        else:
-            K = self.disc.tangent(pt["A"])
+            return self.disc.fbar_element_tangent(pt["fbar"], pt["P_bar"], pt["A"])
+        return self.disc.element_tangent(pt["A"])
+
+    def tangent(self, pt: dict, Ke: np.ndarray | None = None) -> sp.csr_matrix:
+        """The condensed tangent K_ff at the point state ``pt`` of :meth:`evaluate` (or of the
+        element matrices ``Ke``); a DOF with an empty row — all its points failed within this
+        step — gets a positive diagonal."""
+        K = self.disc.assemble_elements(self.element_tangent(pt) if Ke is None else Ke)
         diag = K.diagonal()
         empty = diag == 0.0
         if empty.any():
@@ -217,13 +246,15 @@ class Problem:
 
     # -- element deletion ------------------------------------------------------------------------
     def delete_failed(self, state: State) -> np.ndarray:
-        """Delete the active elements whose points all have D ≥ 1 in ``state``; hold the DOFs left
-        without an element at their displacement in ``state``. Returns the deleted elements."""
+        """Delete the active elements that meet the criterion (D ≥ 1 at any or at all points) in
+        ``state``; hold the DOFs left without an element at their displacement in ``state``.
+        Returns the deleted elements."""
         disc = self.disc
         if not self.deletion:
             return np.zeros(0, dtype=np.int64)
         D = state.history[:, HIST_DAMAGE].reshape(disc.nel, disc.nqp)
-        failed = np.flatnonzero(disc.active & np.all(D >= 1.0, axis=1))
+        crit = np.all if self.deletion == "all" else np.any
+        failed = np.flatnonzero(disc.active & crit(D >= 1.0, axis=1))
         if len(failed):
             orphans = disc.deactivate(failed)
             new = np.setdiff1d(orphans, np.union1d(self.held, self.dirichlet))
@@ -337,9 +368,10 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
             r = r + extra_rhs(u)
         rf = r[free]
         if scale is None:
-            # force scale: applied load, or the reactions of a displacement-driven step
+            # force scale: applied load, or the reactions of a displacement-driven step; never
+            # below the problem's floor (a body that carries nothing, e.g. after fracture)
             scale = max(np.linalg.norm(fext), np.linalg.norm(pt["f_int"]), np.linalg.norm(r),
-                        1e-300)
+                        problem.force_floor, 1e-300)
         rn = np.linalg.norm(rf) / scale
         res.residuals.append(float(rn))
         if not np.isfinite(rn):
@@ -404,6 +436,27 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
     return res
 
 
+def linear_predictor(problem: Problem, state: State, lam: float,
+                     solver: TangentSolver | None = None) -> np.ndarray | None:
+    """The first guess of a step to λ from the committed ``state``: u_n + Δu with the prescribed
+    increment Δu_c = g(λ) − u_n,c on the fixed DOFs and, on the free ones, the linearised
+    equilibrium K_ff Δu_f = f_ext,f(λ) − f_int,f(u_n) − K_fc Δu_c (the tangent at the committed
+    state, elastic for J2). It spreads a prescribed motion over the body instead of concentrating
+    it in the elements next to the fixed DOFs (which a damage law would see as a spurious
+    failure). None if the committed state cannot be evaluated."""
+    disc = problem.disc
+    solver = TangentSolver() if solver is None else solver
+    pt = problem.evaluate(state.u, state, tangent=True)
+    if not pt["ok"]:
+        return None
+    Ke = problem.element_tangent(pt)
+    du = np.zeros(disc.N)
+    du[disc.fixed] = problem.prescribed(lam) - state.u[disc.fixed]
+    rhs = problem.external(lam) - pt["f_int"] - disc.element_matvec(Ke, du)
+    du[disc.free] = solver.solve(problem.tangent(pt, Ke), rhs[disc.free], near=False)
+    return state.u + du
+
+
 def commit(state: State, res: NewtonResult) -> State:
     return State(res.u.copy(), res.point_state["history"].copy(), res.point_state["F33"].copy())
 
@@ -413,7 +466,8 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
               solver: TangentSolver | None = None):
     """Follow λ = 0 → targets[0] → targets[1] … in increments of at most ``max_increment``,
     halving an increment whose Newton fails (down to ``min_increment`` relative to the target),
-    predicting each step by extrapolating the last converged increment.
+    predicting each step by extrapolating the last converged increment (by
+    :func:`linear_predictor` at the first step, after a deletion, and on a retry).
 
     Calls ``callback(k, lam, state)`` when target k is reached. With ``problem.deletion``, failed
     elements are deleted after every converged increment (:meth:`Problem.delete_failed`). Returns
@@ -441,14 +495,20 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
         step = min(max_increment, abs(target - lam))
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             new = lam + np.sign(target - lam) * min(step, abs(target - lam))
-            u0 = state.u.copy()
-            if prev is not None and prev[0] != lam:
+            extrapolated = prev is not None and prev[0] != lam
+            if extrapolated:
                 u0 = state.u + (new - lam) / (lam - prev[0]) * (state.u - prev[1])
+            else:
+                u0 = linear_predictor(problem, state, new, solver)
+                if u0 is None:
+                    u0 = state.u.copy()
             u0[disc.fixed] = problem.prescribed(new)
             res = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
-            if not res.converged and prev is not None:
-                # retry from the last converged state without the predictor
-                u0 = state.u.copy()
+            if not res.converged and extrapolated:
+                # retry from the linearised predictor instead of the extrapolation
+                u0 = linear_predictor(problem, state, new, solver)
+                if u0 is None:
+                    u0 = state.u.copy()
                 u0[disc.fixed] = problem.prescribed(new)
                 res2 = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
                 res2.assembly_time += res.assembly_time

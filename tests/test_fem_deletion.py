@@ -32,7 +32,7 @@ TOL_CURVE = 1e-9
 TOL_ZERO = 1e-8
 
 
-def bar(order, deletion=True):
+def bar(order, deletion="any"):
     disc = Discretisation(box((0, 0, 0), (LB, W, W), (N_EL, 1, 1)), order=order)
     xc = disc.centroids()[:, 0]
     mat_id = ((xc > 2 * LB / N_EL) & (xc < 3 * LB / N_EL)).astype(np.int64)  # the middle one
@@ -46,9 +46,10 @@ def bar(order, deletion=True):
     return problem, end
 
 
-@pytest.mark.parametrize("order", [1, 2], ids=["hex8", "hex27"])
-def test_weak_element_fails_and_the_bar_unloads(order):
-    problem, end = bar(order)
+@pytest.mark.parametrize("order,rule", [(1, "any"), (2, "any"), (2, "all")],
+                         ids=["hex8", "hex27", "hex27-all"])
+def test_weak_element_fails_and_the_bar_unloads(order, rule):
+    problem, end = bar(order, rule)
     disc = problem.disc
     eps = np.array([0.002, 0.01, 0.03, 0.05, EPS_F - 1e-4, EPS_F + 1e-4, EPS_F + 0.01, EPS_F + 0.03])
     R = []
@@ -74,18 +75,19 @@ def test_weak_element_fails_and_the_bar_unloads(order):
     assert len(problem.held) == (0 if order == 1 else 3 * 7)
 
 
-def test_deletion_needs_all_points_failed():
-    """An element goes only when D ≥ 1 at every one of its points (a partly failed element still
-    carries stress at its other points)."""
-    problem, _ = bar(1)
+@pytest.mark.parametrize("rule,deleted", [("any", [1, 3]), ("all", [3])])
+def test_deletion_criterion(rule, deleted):
+    """'any': an element goes when one of its points has D ≥ 1; 'all': when every one has."""
+    problem, _ = bar(1, rule)
     disc = problem.disc
     state = problem.initial_state()
     D = state.history[:, HIST_DAMAGE].reshape(disc.nel, disc.nqp)
-    D[1, :-1] = 1.0  # element 1: all points but one
+    D[1, 0] = 1.0  # element 1: one point
     D[3, :] = 1.5  # element 3: all points
+    D[4, 0] = 0.999  # element 4: not yet
     state.history[:, HIST_DAMAGE] = D.ravel()
-    assert problem.delete_failed(state).tolist() == [3]
-    assert disc.active.tolist() == [True, True, True, False, True]
+    assert problem.delete_failed(state).tolist() == deleted
+    assert (~disc.active).nonzero()[0].tolist() == deleted
     # deletion off: nothing happens
     off, _ = bar(1, deletion=False)
     assert len(off.delete_failed(state)) == 0 and off.disc.active.all()
