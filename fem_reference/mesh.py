@@ -22,7 +22,6 @@ union dropped; the element size from a resolution (:func:`grid_lines`).
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import skfem

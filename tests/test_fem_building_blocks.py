@@ -78,7 +78,8 @@ def test_region_ids_by_centroid_with_priority():
 # ------------------------------------------------------------------------------------------------
 # 0 ≤ X ≤ L, u_X = 0 on X = 0, rollers on every lateral face (uniaxial strain, modulus
 # M_k = λ_k + 2μ_k), gravity g along +X, densities ρ_0 (X < L/2), ρ_1 (X > L/2). Small strain
-# (g = 9.81e-4 m/s², ρ g L/M ~ 3e-9): N(X) = ∫_X^L ρ g dX' (axial stress), u(X) = ∫_0^X N/M dX' — piecewise
+# (g = 9.81e-4 m/s², ρ g L/M ~ 3e-9): N(X) = ∫_X^L ρ g dX' (axial stress),
+# u(X) = ∫_0^X N/M dX' — piecewise
 # quadratic with its kinks on an element boundary, in the space of the quadratic elements. The
 # geometric and material nonlinearity of SVK changes u by 1.5 ε ~ 5e-9 relative: tolerance 1e-7.
 # Reaction of the support X = 0 on the body: −(the weight Σ ρ_k g V_k) whatever the law

@@ -51,7 +51,8 @@ def bar(order, deletion="any"):
 def test_weak_element_fails_and_the_bar_unloads(order, rule):
     problem, end = bar(order, rule)
     disc = problem.disc
-    eps = np.array([0.002, 0.01, 0.03, 0.05, EPS_F - 1e-4, EPS_F + 1e-4, EPS_F + 0.01, EPS_F + 0.03])
+    eps = np.array([0.002, 0.01, 0.03, 0.05, EPS_F - 1e-4, EPS_F + 1e-4, EPS_F + 0.01,
+                    EPS_F + 0.03])
     R = []
 
     def measure(k, lam, state):

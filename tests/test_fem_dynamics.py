@@ -151,3 +151,41 @@ def test_newmark_j2_constant_stretch_rate():
     ke = 0.5 * v ** 2 * Wb * Wb * sum(rho[e] * (((e + 1) * Lb / 4) ** 3 - (e * Lb / 4) ** 3)
                                       / (3 * Lb ** 2) for e in range(4))
     assert np.allclose(run["kinetic_energy"], ke, rtol=1e-9)
+
+
+def test_newmark_deletes_a_failed_element():
+    """The same motion with the second element's damage limit ε_L = 0.02 (in uniaxial strain
+    ε̄_p = p): the reaction follows the closed form while p < ε_L; at the step where p passes
+    ε_L that element fails, is deleted and loses its mass, and the run goes on."""
+    Lb, Wb, v = 4e-3, 1e-3, 1.0
+    disc = Discretisation(box((0, 0, 0), (Lb, Wb, Wb), (4, 1, 1)))
+    weak = TABLE1_STEEL.replace(eps_L=0.02, rho=3 * TABLE1_STEEL.rho)
+    mats = MaterialTable((TABLE1_STEEL, weak))
+    mat_id = np.array([0, 1, 0, 0])
+    bc = Constraints(disc)
+    bc.roller(lambda x: x[0] < 1e-12, 0)
+    end = bc.prescribe(lambda x: x[0] > Lb - 1e-12, 0, lambda t: v * t)
+    bc.roller(lambda x: (x[1] < 1e-12) | (x[1] > Wb - 1e-12), 1)
+    bc.roller(lambda x: (x[2] < 1e-12) | (x[2] > Wb - 1e-12), 2)
+    bc.apply()
+    problem = Problem(disc, mats, None, bc.values, lambda t: np.zeros(disc.N), mat_id=mat_id,
+                      deletion=True)
+    X = disc.basis.doflocs
+    v0 = np.where(np.arange(disc.N) % 3 == 0, v * X[0] / Lb, 0.0)
+    mass0 = problem.mass().sum() / 3
+    rec = []
+    run = newmark(problem, v0, 1e-5, 20, observe=lambda u: u[end[0]], rtol=1e-10,
+                  callback=lambda s, t, st, vel: rec.append(
+                      (t, reaction(problem, st, dofs=end)[0], disc.active.copy())))
+    assert run["status"] == "ok", run["status"]
+    t = np.array([r[0] for r in rec])
+    P, p = uniaxial_strain_j2(TABLE1_STEEL, np.log1p(v * t / Lb))
+    intact = np.array([r[2].all() for r in rec])
+    assert intact[0] and not intact[-1]
+    fail = np.flatnonzero(~intact)[0]
+    assert p[fail - 1] < 0.02 <= p[fail]  # deleted at the step that crossed ε_L
+    R = np.array([r[1] for r in rec])
+    assert np.abs(R[:fail] - P[:fail] * Wb * Wb).max() < TOL_J2 * np.abs(P).max() * Wb * Wb
+    assert run["deleted"].tolist() == [1]
+    # the weak element (ρ 3×) had 3/6 of the mass: half is left
+    assert problem.mass().sum() / 3 == pytest.approx(0.5 * mass0, rel=1e-12)

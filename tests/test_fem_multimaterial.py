@@ -22,7 +22,6 @@ residual) carried to the displacement, plus round-off: 1e-9 relative.
 """
 import numpy as np
 import pytest
-import skfem
 from scipy.optimize import brentq
 
 from fem_reference.assembly import Discretisation
