@@ -2,68 +2,27 @@
 2-D idealisation of the scene.
 
 Every stress comes from :func:`workbench.materials.evaluate` (one material-point implementation
-for all methods). This module only embeds the in-plane deformation gradient into 3×3, takes the
-in-plane blocks of P and A = ∂P/∂F (plane strain, F33 = 1), or solves P33 = 0 for F33 per point and
-condenses the tangent (plane stress).
+for all methods). A body of several materials is a :class:`workbench.materials.MaterialTable` with
+a material id per point (every quadrature point of an element carries its element's id); a single
+:class:`~workbench.materials.Material` is a one-row table. This module only embeds the in-plane
+deformation gradient into 3×3, takes the in-plane blocks of P and A = ∂P/∂F (plane strain,
+F33 = 1), or solves P33 = 0 for F33 per point and condenses the tangent (plane stress).
 
-Until the numba kernels of :mod:`workbench.materials.kernels` exist, a numpy Saint Venant–Kirchhoff
-point routine stands in (:func:`svk_points`), with the same contract; the other laws need the
-kernels.
+The stored energy density comes from the library too (:func:`stored_energy_density`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from workbench.materials import Material, evaluate
-
-
-def svk_points(material: Material, F: np.ndarray, tangent: bool = True):
-    """Saint Venant–Kirchhoff: S = λ tr(E) I + 2μ E, E = ½(FᵀF − I), P = F S.
-
-    F: (N, 3, 3). Returns P (N, 3, 3) and, with ``tangent``, A (N, 3, 3, 3, 3) with
-    A_iJkL = δ_ik S_JL + λ F_iJ F_kL + μ ((FFᵀ)_ik δ_JL + F_iL F_kJ).
-    """
-    lam, mu = material.lam, material.mu
-    I = np.eye(3)
-    E = 0.5 * (np.einsum("nki,nkj->nij", F, F) - I)
-    trE = np.trace(E, axis1=1, axis2=2)
-    S = lam * trE[:, None, None] * I + 2 * mu * E
-    P = F @ S
-    if not tangent:
-        return P, None
-    Fs = F[:, :, :, None, None]  # F_iJ
-    Ft = F[:, None, None, :, :]  # F_kL
-    A = lam * Fs * Ft
-    A += mu * F[:, :, None, None, :] * np.swapaxes(F, 1, 2)[:, None, :, :, None]  # F_iL F_kJ
-    FFt = F @ np.swapaxes(F, 1, 2)
-    A += (mu * FFt)[:, :, None, :, None] * I[None, None, :, None, :]  # (FFᵀ)_ik δ_JL
-    A += I[None, :, None, :, None] * S[:, None, :, None, :]  # δ_ik S_JL
-    return P, A
-
-
-def svk_energy(material: Material, F: np.ndarray) -> np.ndarray:
-    """Stored energy density W = λ/2 (tr E)² + μ E:E of Saint Venant–Kirchhoff, J/m³, shape (N,)."""
-    E = 0.5 * (np.einsum("nki,nkj->nij", F, F) - np.eye(3))
-    trE = np.trace(E, axis1=1, axis2=2)
-    return 0.5 * material.lam * trE ** 2 + material.mu * np.einsum("nij,nij->n", E, E)
-
+from workbench.materials import MaterialTable, evaluate
 
 SERIAL_BELOW = 20000  # points: smaller updates run on one thread
 
 
-def _kernels_available() -> bool:
-    try:
-        from workbench.materials import kernels  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
-def points_3d(material: Material, F: np.ndarray, history: np.ndarray, tangent: bool = True):
-    """P, A, new history and status of 3×3 deformation gradients F (N, 3, 3)."""
-    if material.law == "svk" and not _kernels_available():
-        P, A = svk_points(material, F, tangent)
-        return P, A, history, np.zeros(len(F), dtype=np.int64)
+def points_3d(material, F: np.ndarray, history: np.ndarray, tangent: bool = True, mat_id=None):
+    """P (N, 3, 3), A (N, 3, 3, 3, 3) or None, new history (N, n_history) and status (N,) of
+    3×3 deformation gradients F (N, 3, 3); ``material`` a Material or a MaterialTable with
+    ``mat_id`` (N,) rows of it (default all 0)."""
     import numba
 
     threads = numba.get_num_threads()
@@ -71,7 +30,7 @@ def points_3d(material: Material, F: np.ndarray, history: np.ndarray, tangent: b
         # a parallel launch costs ~15 ms on a busy 2-core machine: more than a small mesh's update
         numba.set_num_threads(1)
     try:
-        res = evaluate(material, F, history, tangent=tangent)
+        res = evaluate(material, F, history, tangent=tangent, mat_id=mat_id)
     finally:
         numba.set_num_threads(threads)
     return res["stress"], res.get("A"), res["history"], np.asarray(res["status"])
@@ -91,10 +50,11 @@ def embed(H: np.ndarray, F33=None) -> np.ndarray:
     return F
 
 
-def update(material: Material, H: np.ndarray, history: np.ndarray, plane: str | None,
-           tangent: bool = True, F33: np.ndarray | None = None, tol: float = 1e-12):
+def update(material, H: np.ndarray, history: np.ndarray | None, plane: str | None,
+           tangent: bool = True, F33: np.ndarray | None = None, tol: float = 1e-12, mat_id=None):
     """Stress and tangent of the discretisation's dimension from displacement gradients.
 
+    material: a Material, or a MaterialTable with ``mat_id`` (N,) its row per point.
     H: (N, d, d) with d = 3, or d = 2 with ``plane`` 'strain' (F33 = 1) or 'stress' (F33 solved per
     point so that P33 = 0 by Newton from the guess ``F33``; the tangent is the condensed
     A_abcd − A_ab33 A_33cd / A_3333).
@@ -103,20 +63,21 @@ def update(material: Material, H: np.ndarray, history: np.ndarray, plane: str | 
     d = H.shape[1]
     if d == 3 or plane == "strain":
         F = embed(H)
-        P, A, h, st = points_3d(material, F, history, tangent)
+        P, A, h, st = points_3d(material, F, history, tangent, mat_id)
         return dict(P=P[:, :d, :d], A=None if A is None else A[:, :d, :d, :d, :d], history=h,
                     status=st, F33=np.ones(len(H)))
     if plane != "stress":
         raise ValueError(f"plane: {plane!r} is not one of 'strain', 'stress'")
     F33 = np.ones(len(H)) if F33 is None else np.array(F33, dtype=float)
-    scale = max(material.E, 1.0)
+    scale = max(max(m.E for m in MaterialTable.of(material).materials), 1.0)
     for _ in range(30):
         F = embed(H, F33)
-        P, A, h, st = points_3d(material, F, history, True)
+        P, A, h, st = points_3d(material, F, history, True, mat_id)
         r = P[:, 2, 2]
-        if np.max(np.abs(r)) <= tol * scale:
+        if np.max(np.abs(r), initial=0.0) <= tol * scale:
             break
-        step = r / A[:, 2, 2, 2, 2]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            step = np.where(A[:, 2, 2, 2, 2] != 0, r / A[:, 2, 2, 2, 2], 0.0)
         F33 = F33 - step
         # keep the out-of-plane stretch positive
         F33 = np.where(F33 <= 0, 0.5 * (F33 + step), F33)
@@ -125,13 +86,49 @@ def update(material: Material, H: np.ndarray, history: np.ndarray, plane: str | 
     out = dict(P=P[:, :2, :2], history=h, status=st, F33=F33, A=None)
     if tangent:
         A2 = A[:, :2, :2, :2, :2]
-        out["A"] = A2 - np.einsum("nij,nkl->nijkl", A[:, :2, :2, 2, 2], A[:, 2, 2, :2, :2]) \
-            / A[:, 2, 2, 2, 2][:, None, None, None, None]
+        a33 = A[:, 2, 2, 2, 2]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            inv = np.where(a33 != 0, 1.0 / a33, 0.0)  # a failed point: A = 0, nothing to condense
+        out["A"] = A2 - np.einsum("nij,nkl,n->nijkl", A[:, :2, :2, 2, 2], A[:, 2, 2, :2, :2], inv)
     return out
 
 
-def strain_energy_density(material: Material, H: np.ndarray, F33=None) -> np.ndarray:
-    """W(F) per point for Saint Venant–Kirchhoff (the dynamic runs' strain energy), J/m³."""
-    if material.law != "svk":
-        raise ValueError(f"law: strain energy only for 'svk', not {material.law!r}")
-    return svk_energy(material, embed(H, F33))
+N_GAUSS_ENERGY = 6  # Gauss–Legendre points of the path integral (exact for SVK from 2)
+
+
+def stored_energy_density(material, F: np.ndarray, history: np.ndarray | None = None,
+                          mat_id=None) -> np.ndarray:
+    """Stored energy density ψ(F) per point, J/m³, shape (N,), from the material library.
+
+    F: (N, 3, 3) (:func:`embed` of the points' H and F33). With the library's closed-form
+    ``workbench.materials.stored_energies(F, h, prm_table, mat_id)`` (when present) every law,
+    J2 included, is answered. Until then the hyperelastic laws integrate the library's own stress
+    along the straight path F(s) = I + s (F − I), ψ(F) = ∫₀¹ P(F(s)) : (F − I) ds (exact for a
+    hyperelastic law, P = ∂ψ/∂F, ψ(I) = 0), by Gauss–Legendre with ``N_GAUSS_ENERGY`` points —
+    exact for Saint Venant–Kirchhoff (a cubic integrand), converged to round-off for the others at
+    the strains of the scenes — and points of a J2 material, whose stored energy depends on the
+    plastic history, are NaN. (The particle methods' diagnostics do the same; the solver packages
+    do not import each other.)
+    """
+    import workbench.materials as wm
+
+    table = MaterialTable.of(material)
+    F = np.ascontiguousarray(F, dtype=float)
+    mat_id = (np.zeros(len(F), np.int64) if mat_id is None
+              else np.ascontiguousarray(np.broadcast_to(mat_id, (len(F),)), dtype=np.int64))
+    if hasattr(wm, "stored_energies"):
+        h = table.initial_history(mat_id) if history is None else history
+        return np.asarray(wm.stored_energies(F, h, table.params(), mat_id), dtype=float)
+    out = np.full(len(F), np.nan)
+    elastic = np.array([m.law != "j2" for m in table.materials])[mat_id]
+    if not elastic.any():
+        return out
+    Fe, ids = F[elastic], mat_id[elastic]
+    H = Fe - np.eye(3)
+    x, w = np.polynomial.legendre.leggauss(N_GAUSS_ENERGY)
+    psi = np.zeros(len(Fe))
+    for s, ws in zip(0.5 * (x + 1.0), 0.5 * w):
+        P, _, _, _ = points_3d(table, np.eye(3) + s * H, None, False, ids)
+        psi += ws * np.einsum("nij,nij->n", P, H)
+    out[elastic] = psi
+    return out

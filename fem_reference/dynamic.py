@@ -1,67 +1,81 @@
 """Implicit dynamics: Newmark's average-acceleration rule (β = 1/4, γ = 1/2, the trapezoidal
 rule), unconditionally stable and energy-conserving for linear problems, second-order accurate.
 
-    M a_{n+1} + f_int(u_{n+1}) = f_ext,
+    M a_{n+1} + f_int(u_{n+1}) = f_ext(t_{n+1}),
     u_{n+1} = u_n + Δt v_n + Δt²/4 (a_n + a_{n+1}),    v_{n+1} = v_n + Δt/2 (a_n + a_{n+1}),
 
 solved for u_{n+1} by Newton with the effective tangent K + 4/Δt² M (Hughes, *The finite element
-method*, §9.1). Kinetic energy ½ vᵀMv and strain energy ∫ W(F) dV are recorded every step.
+method*, §9.1). The load parameter of the :class:`~fem_reference.static.Problem` is the time: the
+Dirichlet values and f_ext are evaluated at t_{n+1}. M is the consistent mass with each element's
+density; the history (J2) is committed at every converged step, and with ``problem.deletion``
+failed elements are deleted after it (M is then rebuilt without them). Kinetic energy ½vᵀMv and
+stored energy ∫ ψ dV (:meth:`~fem_reference.static.Problem.stored_energy`) are recorded every
+step.
 """
 from __future__ import annotations
 
-
 import numpy as np
+import scipy.sparse.linalg as spla
 
-from .constitutive import strain_energy_density
 from .static import Problem, TangentSolver, commit, newton
 
 
 def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
-            rtol: float = 1e-10, maxit: int = 20, snapshot=None):
-    """Advance from rest at u = 0 with initial velocity v0 (N,) for ``n_steps`` steps of ``dt``.
+            rtol: float = 1e-10, maxit: int = 20, snapshot=None, callback=None):
+    """Advance from u = 0 (the prescribed values of the fixed DOFs at t = 0) with initial velocity
+    v0 (N,) for ``n_steps`` steps of ``dt``. On the fixed DOFs v0 must be the rate of the
+    prescribed motion at t = 0 (zero on a clamp): the consistent mass couples their acceleration
+    into the free DOFs.
 
-    ``observe(u)`` returns the scalar recorded each step (e.g. a tip displacement);
+    ``observe(u)`` returns the scalar (or array) recorded each step (e.g. a tip displacement);
     ``snapshot(step, t, u, v)`` (optional) is called at the start and after every step (field
-    output; it decides which steps it writes).
-    Returns dict(time, observed, kinetic_energy, strain_energy, status, newton_iterations).
+    output; it decides which steps it writes); ``callback(step, t, state, v)`` (optional) too, with
+    the committed :class:`~fem_reference.static.State`.
+    The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) on the free DOFs.
+    Returns dict(time, observed, kinetic_energy, strain_energy (stored energy, J; NaN where the
+    material library has none), status, newton_iterations, deleted (elements, in order)).
     """
     disc = problem.disc
-    free = disc.free
-    M_full = disc.mass(problem.material.rho)
-    M_ff = M_full[free][:, free].tocsr()
+    M_full = problem.mass()
     state = problem.initial_state()
+    state.u[disc.fixed] = problem.prescribed(0.0)
     u = state.u.copy()
-    v = v0.copy()
-    v[disc.fixed] = 0.0
-    a = np.zeros(disc.N)  # f_int(0) = 0, f_ext = 0: the initial acceleration is zero
+    v = np.array(v0, dtype=float)
+    a = np.zeros(disc.N)
+    pt0 = problem.evaluate(u, state, tangent=False)
+    r0 = problem.external(0.0) - pt0["f_int"]
+    if np.any(r0[disc.free] != 0):
+        M_ff = M_full[disc.free][:, disc.free].tocsc()
+        a[disc.free] = spla.splu(M_ff).solve(r0[disc.free])
     c = 4.0 / dt ** 2
-
-    def energy(st):
-        if problem.material.law != "svk":
-            return np.nan
-        H = disc.displacement_gradient(st.u)
-        return disc.integrate(strain_energy_density(problem.material, H, st.F33))
 
     t = [0.0]
     obs = [observe(u)]
     ke = [0.5 * v @ (M_full @ v)]
-    se = [energy(state)]
+    se = [problem.stored_energy(state)]
     iters = []
+    deleted = []
     status = "ok"
     solver = TangentSolver()
+    M_ff = M_full[disc.free][:, disc.free].tocsr()
     if snapshot is not None:
         snapshot(0, 0.0, u, v)
+    if callback is not None:
+        callback(0, 0.0, state, v)
     for n in range(n_steps):
-        # a_{n+1}(u) = c (u − u_n − Δt v_n) − a_n; residual f_int(u) + M a_{n+1}(u)
+        tn = (n + 1) * dt
+        # a_{n+1}(u) = c (u − u_n − Δt v_n) − a_n; residual f_int(u) + M a_{n+1}(u) − f_ext
         base = u + dt * v
 
         def inertia(x, base=base, a=a):
             return M_full @ (c * (x - base) - a)
 
-        res = newton(problem, state, u + dt * v, 0.0, rtol=rtol, maxit=maxit,
+        u0 = u + dt * v
+        u0[disc.fixed] = problem.prescribed(tn)
+        res = newton(problem, state, u0, tn, rtol=rtol, maxit=maxit,
                      extra_matrix=c * M_ff, extra_rhs=inertia, solver=solver)
         if not res.converged:
-            status = f"diverged at t={t[-1] + dt:.4g}: {res.reason}"
+            status = f"diverged at t={tn:.4g}: {res.reason}"
             break
         iters.append(res.iterations)
         state = commit(state, res)
@@ -69,11 +83,21 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         v = v + dt / 2 * (a + a_new)
         a = a_new
         u = state.u
-        t.append((n + 1) * dt)
+        gone = problem.delete_failed(state)
+        if len(gone):
+            deleted.extend(gone.tolist())
+            M_full = problem.mass()
+            M_ff = M_full[disc.free][:, disc.free].tocsr()
+            a[problem.held] = 0.0
+            v[problem.held] = 0.0
+        t.append(tn)
         obs.append(observe(u))
         ke.append(0.5 * v @ (M_full @ v))
-        se.append(energy(state))
+        se.append(problem.stored_energy(state))
         if snapshot is not None:
             snapshot(n + 1, t[-1], u, v)
+        if callback is not None:
+            callback(n + 1, tn, state, v)
     return dict(time=np.array(t), observed=np.array(obs), kinetic_energy=np.array(ke),
-                strain_energy=np.array(se), status=status, newton_iterations=iters)
+                strain_energy=np.array(se), status=status, newton_iterations=iters,
+                deleted=np.array(deleted, dtype=np.int64))

@@ -1,9 +1,32 @@
 """Static equilibrium: Newton–Raphson with a line search, load stepping with step cutting.
 
-A :class:`Problem` is a discretisation with a material, the 2-D idealisation, the Dirichlet DOFs
-with their values as a function of the load parameter λ, and the external force f_ext(λ). Its
-state (u, history and F33 at the points) is committed only at a converged load step, so that a
-failed step is retried from the last converged state with a smaller increment.
+A :class:`Problem` is a discretisation with a material (or a table of materials and a material id
+per element), the 2-D idealisation, the Dirichlet DOFs with their values as a function of the load
+parameter λ, and the external force f_ext(λ). Its state (u, history and F33 at the points) is
+committed only at a converged load step, so that a failed step is retried from the last converged
+state with a smaller increment.
+
+Element deletion (``Problem(..., deletion=True)``, for fracture): after every committed step the
+elements that meet the failure criterion on the damage D of the J2 law (history column
+``HIST_DAMAGE``; a point with D ≥ 1 carries no stress, 000 eq. 36) are deleted
+(:meth:`~fem_reference.assembly.Discretisation.deactivate`): no force, stiffness or mass from then
+on; the DOFs that no active element touches are held at their current displacement so that the
+tangent stays regular. Criterion (``deletion``):
+
+- ``'any'`` (``True``, the default): D ≥ 1 at any point of the element. An element with some
+  failed points is under-integrated — it has zero-energy modes that nothing controls — so it must
+  not outlive the step in which its first point failed: with ``'all'`` the micro-cantilever of
+  :func:`fem_reference.drivers.solve_micro_cantilever` diverges at the first partly failed
+  elements (inverted elements in the line search), with ``'any'`` it runs through to separation.
+  The element's other points lose their stress one step early: the usual price of erosion (the
+  crack is one element wide either way).
+- ``'all'``: D ≥ 1 at every point; deleting then changes nothing but the regularity of the
+  system (the material had already released the element). For homogeneous states.
+
+Points with D ≥ 1 in the committed state are not evaluated (their stress and tangent are zero
+and their F, which nothing resists, may be inverted). Within a Newton iteration a DOF whose every
+point has just failed has an empty row; its diagonal is set to a positive value (its residual is
+zero, so it does not move) until the step is committed and the element deleted.
 
 Newton: K_ff Δu_f = −r_f with r = f_int(u) − f_ext(λ); the step length α comes from a secant line
 search on g(α) = Δu·r(u + αΔu) (Crisfield, *Non-linear FEA of solids and structures*, vol. 1,
@@ -22,8 +45,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .assembly import Discretisation
-from .constitutive import update
-from workbench.materials import Material
+from .constitutive import embed, stored_energy_density, update
+from workbench.materials import HIST_DAMAGE, Material, MaterialTable
 
 
 @dataclass
@@ -37,70 +60,211 @@ class State:
 
 @dataclass
 class Problem:
-    """``f_ext(λ)`` holds the distributed loads (tractions, pressures); ``point_loads``, a sequence
-    of (x (d,), force (d,)) pairs, adds point forces on the nodes at x, scaled by λ like f_ext.
-    The element formulation (standard or F-bar) is the discretisation's (``disc.fbar``)."""
+    """``material``: a :class:`~workbench.materials.Material` or a
+    :class:`~workbench.materials.MaterialTable` with ``mat_id`` (nel,) the row of each element
+    (default all 0; every quadrature point of an element takes its element's row; the history has
+    the table's width). ``fixed_values(λ)`` gives the values of the Dirichlet DOFs ``disc.fixed``
+    as they are when the problem is made (:class:`fem_reference.boundary.Constraints` builds both).
+    ``f_ext(λ)`` holds the distributed loads (tractions, pressures, body forces;
+    :class:`fem_reference.boundary.Loads`); ``point_loads``, a sequence of (x (d,), force (d,))
+    pairs, adds point forces on the nodes at x, scaled by λ like f_ext. The element formulation
+    (standard or F-bar) is the discretisation's (``disc.fbar``). ``deletion``: False, True (=
+    'any'), 'any' or 'all': delete failed elements by that criterion (module docstring)."""
 
     disc: Discretisation
-    material: Material
+    material: Material | MaterialTable
     plane: str | None  # 'strain', 'stress' or None in 3-D
     fixed_values: Callable[[float], np.ndarray]  # λ -> values of disc.fixed (len(disc.fixed),)
     f_ext: Callable[[float], np.ndarray]  # λ -> (N,)
     point_loads: tuple = ()
+    mat_id: np.ndarray | None = None
+    deletion: bool | str = False
 
     def __post_init__(self):
+        disc = self.disc
+        self.table = MaterialTable.of(self.material)
+        if self.mat_id is None:
+            self.mat_id = np.zeros(disc.nel, dtype=np.int64)
+        mat_id = np.asarray(self.mat_id)
+        if mat_id.shape != (disc.nel,) or not np.issubdtype(mat_id.dtype, np.integer):
+            raise ValueError(f"mat_id: must be an integer array of shape ({disc.nel},), "
+                             f"got {mat_id.dtype} {mat_id.shape}")
+        if len(mat_id) and (mat_id.min() < 0 or mat_id.max() >= len(self.table)):
+            raise ValueError(f"mat_id: values must lie in [0, {len(self.table)})")
+        self.mat_id = mat_id.astype(np.int64)
+        self.point_mat = np.repeat(self.mat_id, disc.nqp)
         self._f_point = None
         if len(self.point_loads):
-            self._f_point = sum(self.disc.point_load(x, f) for x, f in self.point_loads)
-        if self.disc.fbar is not None and self.plane != "strain":
-            raise ValueError(f"plane: F-bar needs plane strain, not {self.plane!r}")
+            self._f_point = sum(disc.point_load(x, f) for x, f in self.point_loads)
+        if disc.fbar is not None and disc.d == 2 and self.plane != "strain":
+            raise ValueError(f"plane: F-bar in 2-D needs plane strain, not {self.plane!r}")
+        if self.deletion is True:
+            self.deletion = "any"
+        if self.deletion not in (False, None, "any", "all"):
+            raise ValueError(f"deletion: {self.deletion!r} is not one of False, True, 'any', "
+                             "'all'")
+        if self.deletion and self.table.n_history <= HIST_DAMAGE:
+            raise ValueError("deletion: needs a damage history (a J2 material in the table)")
+        self.dirichlet = disc.fixed.copy()  # the DOFs fixed_values() answers for
+        self.held = np.zeros(0, dtype=np.int64)  # DOFs of deleted material, held in place
+        self.held_values = np.zeros(0)
+
+    # -- data per element ------------------------------------------------------------------------
+    @property
+    def force_floor(self) -> float:
+        """The smallest force scale of Newton's relative residual, N (N/m in 2-D): the force of a
+        strain of 1e-6 on a cross-section of the body, 1e-6 E_max V^{(d−1)/d} (V the reference
+        volume). A body that carries nothing (unloaded, or broken) then converges at a residual
+        1e-6 rtol of that instead of chasing round-off relative to zero."""
+        disc = self.disc
+        E = max(m.E for m in self.table.materials)
+        return 1e-6 * E * float(disc.dV0.sum()) ** ((disc.d - 1) / disc.d)
+
+    def rho(self) -> np.ndarray:
+        """Density of each element (nel,), kg/m³."""
+        return self.table.rho(self.mat_id)
+
+    def mass(self) -> sp.csr_matrix:
+        """Consistent mass matrix (N × N) of the active elements."""
+        return self.disc.mass(self.rho())
 
     def external(self, lam: float) -> np.ndarray:
         """The external force vector (N,) at load parameter λ."""
         f = self.f_ext(lam)
         return f if self._f_point is None else f + lam * self._f_point
 
+    def prescribed(self, lam: float) -> np.ndarray:
+        """Values of all fixed DOFs ``disc.fixed`` at λ: the Dirichlet values, and the held DOFs
+        of deleted material at their displacement when it was deleted."""
+        fixed = self.disc.fixed
+        if not len(self.held):
+            return self.fixed_values(lam)
+        g = np.zeros(len(fixed))
+        if len(self.held):
+            g[np.searchsorted(fixed, self.held)] = self.held_values
+        if len(self.dirichlet):
+            g[np.searchsorted(fixed, self.dirichlet)] = self.fixed_values(lam)
+        return g
+
     def initial_state(self) -> State:
         n = self.disc.nel * self.disc.nqp
-        return State(np.zeros(self.disc.N), self.material.initial_history(n), np.ones(n))
+        return State(np.zeros(self.disc.N), self.table.initial_history(self.point_mat), np.ones(n))
 
+    def live_points(self, state: State) -> np.ndarray:
+        """bool (nel·nqp,): points of active elements not failed (D < 1) in ``state``."""
+        live = np.repeat(self.disc.active, self.disc.nqp)
+        if self.table.n_history > HIST_DAMAGE:
+            live &= state.history[:, HIST_DAMAGE] < 1.0
+        return live
+
+    # -- the material update ---------------------------------------------------------------------
     def evaluate(self, u: np.ndarray, state: State, tangent: bool = True) -> dict:
         """Material update from the committed ``state`` at displacement u: P, A, new history,
         status, F33, J (points), f_int (N,).
 
-        With F-bar, the material is evaluated at F̄, ``P`` is the stress P̃ = α⁻¹ P(F̄) that the
-        internal force integrates (its Cauchy stress P̃ Fᵀ/J is σ(F̄)), ``A`` is ∂P/∂F at F̄ and
-        ``fbar`` holds the kinematics for :meth:`tangent`; ``J`` is det F and ``Jbar`` J̄."""
+        With F-bar, the material is evaluated at F̄, ``P`` is the stress P̃ = α^{1−d} P(F̄) that
+        the internal force integrates (its Cauchy stress P̃ Fᵀ/J is σ(F̄)), ``A`` is ∂P/∂F at F̄
+        and ``fbar`` holds the kinematics for :meth:`tangent`; ``J`` is det F and ``Jbar`` J̄.
+        Points that are not :meth:`live_points` get P = A = 0 and keep their history."""
         disc = self.disc
+        d = disc.d
         H = disc.displacement_gradient(u)
+        live = self.live_points(state)
+        all_live = bool(live.all())
         kin = None
         if disc.fbar is not None:
             kin = disc.fbar_kinematics(H)
-            good = np.all(kin["J"] > 0) and np.all(kin["Jbar"] > 0)
+            good = np.all(kin["J"][live] > 0) and np.all(kin["Jbar"][live] > 0)
             Hm = kin["Hbar"] if good else H
         else:
             Hm = H
-        out = update(self.material, Hm, state.history, self.plane, tangent=tangent, F33=state.F33)
-        d = disc.d
+        if all_live:
+            out = update(self.table, Hm, state.history, self.plane, tangent=tangent,
+                         F33=state.F33, mat_id=self.point_mat)
+        else:
+            sub = update(self.table, Hm[live], state.history[live], self.plane, tangent=tangent,
+                         F33=state.F33[live], mat_id=self.point_mat[live])
+            n = len(H)
+            out = dict(P=np.zeros((n, d, d)), A=None, history=state.history.copy(),
+                       status=np.zeros(n, dtype=np.int64), F33=state.F33.copy())
+            out["P"][live] = sub["P"]
+            out["history"][live] = sub["history"]
+            out["status"][live] = sub["status"]
+            out["F33"][live] = sub["F33"]
+            if tangent:
+                out["A"] = np.zeros((n, d, d, d, d))
+                out["A"][live] = sub["A"]
         if kin is not None:
+            if not all_live:  # dead points: keep the kinematics finite for the tangent
+                dead = ~live & ~((kin["J"] > 0) & (kin["Jbar"] > 0))
+                kin["F"][dead] = np.eye(d)
+                kin["J"][dead] = 1.0
+                kin["Jbar"][dead] = 1.0
+                kin["alpha"][dead] = 1.0
             out["J"], out["Jbar"], out["fbar"] = kin["J"], kin["Jbar"], kin
             J = np.minimum(kin["J"], kin["Jbar"])
             if good:
                 out["P_bar"] = out["P"]
-                out["P"] = out["P"] / kin["alpha"][:, None, None]
+                out["P"] = disc.fbar_stress(kin, out["P"])
         else:
             Fd = H + np.eye(d)
             J = np.linalg.det(Fd) * (out["F33"] if d == 2 else 1.0)
             out["J"] = J
-        out["ok"] = bool(np.all(J > 0) and np.all(np.isfinite(out["P"])) and np.all(out["status"] == 0))
+        out["live"] = live
+        out["ok"] = bool(np.all(J[live] > 0) and np.all(np.isfinite(out["P"][live]))
+                         and np.all(out["status"][live] == 0))
         out["f_int"] = disc.internal_force(out["P"]) if out["ok"] else None
         return out
 
-    def tangent(self, pt: dict) -> sp.csr_matrix:
-        """The condensed tangent K_ff at the point state ``pt`` of :meth:`evaluate`."""
+    def element_tangent(self, pt: dict) -> np.ndarray:
+        """Element tangent matrices (nel, nb·d, nb·d) at the point state ``pt``."""
         if self.disc.fbar is not None:
-            return self.disc.fbar_tangent(pt["fbar"], pt["P_bar"], pt["A"])
-        return self.disc.tangent(pt["A"])
+            return self.disc.fbar_element_tangent(pt["fbar"], pt["P_bar"], pt["A"])
+        return self.disc.element_tangent(pt["A"])
+
+    def tangent(self, pt: dict, Ke: np.ndarray | None = None) -> sp.csr_matrix:
+        """The condensed tangent K_ff at the point state ``pt`` of :meth:`evaluate` (or of the
+        element matrices ``Ke``); a DOF with an empty row — all its points failed within this
+        step — gets a positive diagonal."""
+        K = self.disc.assemble_elements(self.element_tangent(pt) if Ke is None else Ke)
+        diag = K.diagonal()
+        empty = diag == 0.0
+        if empty.any():
+            scale = float(np.mean(np.abs(diag[~empty]))) if (~empty).any() else 1.0
+            K = (K + sp.diags(np.where(empty, scale, 0.0))).tocsr()
+        return K
+
+    def stored_energy(self, state: State) -> float:
+        """∫ ψ dV over the live points, J (J/m in 2-D) (:func:`~.constitutive.
+        stored_energy_density`; NaN where the library has no stored energy for a law)."""
+        disc = self.disc
+        live = self.live_points(state)
+        F = embed(disc.displacement_gradient(state.u)[live], state.F33[live])
+        w = np.zeros(disc.nel * disc.nqp)
+        w[live] = stored_energy_density(self.table, F, state.history[live], self.point_mat[live])
+        return disc.integrate(w)
+
+    # -- element deletion ------------------------------------------------------------------------
+    def delete_failed(self, state: State) -> np.ndarray:
+        """Delete the active elements that meet the criterion (D ≥ 1 at any or at all points) in
+        ``state``; hold the DOFs left without an element at their displacement in ``state``.
+        Returns the deleted elements."""
+        disc = self.disc
+        if not self.deletion:
+            return np.zeros(0, dtype=np.int64)
+        D = state.history[:, HIST_DAMAGE].reshape(disc.nel, disc.nqp)
+        crit = np.all if self.deletion == "all" else np.any
+        failed = np.flatnonzero(disc.active & crit(D >= 1.0, axis=1))
+        if len(failed):
+            orphans = disc.deactivate(failed)
+            new = np.setdiff1d(orphans, np.union1d(self.held, self.dirichlet))
+            if len(new):
+                self.held = np.concatenate([self.held, new])
+                self.held_values = np.concatenate([self.held_values, state.u[new]])
+                order = np.argsort(self.held)
+                self.held, self.held_values = self.held[order], self.held_values[order]
+            disc.set_fixed(np.union1d(self.dirichlet, self.held))
+        return failed
 
 
 @dataclass
@@ -149,6 +313,7 @@ class TangentSolver:
 
     def _factor(self, K):
         self.factorisations += 1
+        self.shape = K.shape
         if sp.isspmatrix_csr(K):
             lu = spla.splu(K.T, permc_spec="MMD_AT_PLUS_A")
             self.lu = lambda x: lu.solve(x, trans="T")
@@ -161,7 +326,7 @@ class TangentSolver:
         is close to the last factorised one (Newton near convergence), worth a Krylov try."""
         rtol = self.rtol if rtol is None else rtol
         reuse = self.reuse if self.reuse is not None else K.shape[0] > self.reuse_above
-        if reuse and near and self.lu is not None:
+        if reuse and near and self.lu is not None and self.shape == K.shape:
             M = spla.LinearOperator(K.shape, matvec=self.lu, dtype=float)
             count = [0]
 
@@ -203,9 +368,10 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
             r = r + extra_rhs(u)
         rf = r[free]
         if scale is None:
-            # force scale: applied load, or the reactions of a displacement-driven step
+            # force scale: applied load, or the reactions of a displacement-driven step; never
+            # below the problem's floor (a body that carries nothing, e.g. after fracture)
             scale = max(np.linalg.norm(fext), np.linalg.norm(pt["f_int"]), np.linalg.norm(r),
-                        1e-300)
+                        problem.force_floor, 1e-300)
         rn = np.linalg.norm(rf) / scale
         res.residuals.append(float(rn))
         if not np.isfinite(rn):
@@ -270,6 +436,27 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
     return res
 
 
+def linear_predictor(problem: Problem, state: State, lam: float,
+                     solver: TangentSolver | None = None) -> np.ndarray | None:
+    """The first guess of a step to λ from the committed ``state``: u_n + Δu with the prescribed
+    increment Δu_c = g(λ) − u_n,c on the fixed DOFs and, on the free ones, the linearised
+    equilibrium K_ff Δu_f = f_ext,f(λ) − f_int,f(u_n) − K_fc Δu_c (the tangent at the committed
+    state, elastic for J2). It spreads a prescribed motion over the body instead of concentrating
+    it in the elements next to the fixed DOFs (which a damage law would see as a spurious
+    failure). None if the committed state cannot be evaluated."""
+    disc = problem.disc
+    solver = TangentSolver() if solver is None else solver
+    pt = problem.evaluate(state.u, state, tangent=True)
+    if not pt["ok"]:
+        return None
+    Ke = problem.element_tangent(pt)
+    du = np.zeros(disc.N)
+    du[disc.fixed] = problem.prescribed(lam) - state.u[disc.fixed]
+    rhs = problem.external(lam) - pt["f_int"] - disc.element_matvec(Ke, du)
+    du[disc.free] = solver.solve(problem.tangent(pt, Ke), rhs[disc.free], near=False)
+    return state.u + du
+
+
 def commit(state: State, res: NewtonResult) -> State:
     return State(res.u.copy(), res.point_state["history"].copy(), res.point_state["F33"].copy())
 
@@ -279,11 +466,14 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
               solver: TangentSolver | None = None):
     """Follow λ = 0 → targets[0] → targets[1] … in increments of at most ``max_increment``,
     halving an increment whose Newton fails (down to ``min_increment`` relative to the target),
-    predicting each step by extrapolating the last converged increment.
+    predicting each step by extrapolating the last converged increment (by
+    :func:`linear_predictor` at the first step, after a deletion, and on a retry).
 
-    Calls ``callback(k, lam, state, newton_results)`` when target k is reached. Returns a list of
-    dicts per target: lam, converged, status, residual_history (list of lists, one per increment),
-    iterations, wall_time (cumulative, s), assembly_time, solve_time.
+    Calls ``callback(k, lam, state)`` when target k is reached. With ``problem.deletion``, failed
+    elements are deleted after every converged increment (:meth:`Problem.delete_failed`). Returns
+    (a list of dicts per target: lam, converged, status, residual_history (list of lists, one per
+    increment), iterations, wall_time (cumulative, s), assembly_time, solve_time,
+    newton_iterations, deleted (elements deleted while reaching this target); the final state).
     """
     state = problem.initial_state()
     disc = problem.disc
@@ -295,7 +485,8 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
     failed = False
     for k, target in enumerate(targets):
         rec = dict(lam=float(target), converged=False, status="", residual_history=[], iterations=0,
-                   assembly_time=0.0, solve_time=0.0, newton_iterations=[])
+                   assembly_time=0.0, solve_time=0.0, newton_iterations=[],
+                   deleted=np.zeros(0, dtype=np.int64))
         if failed:
             rec["status"] = "diverged: an earlier load failed"
             rec["wall_time"] = np.nan
@@ -304,15 +495,21 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
         step = min(max_increment, abs(target - lam))
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             new = lam + np.sign(target - lam) * min(step, abs(target - lam))
-            u0 = state.u.copy()
-            if prev is not None and prev[0] != lam:
+            extrapolated = prev is not None and prev[0] != lam
+            if extrapolated:
                 u0 = state.u + (new - lam) / (lam - prev[0]) * (state.u - prev[1])
-            u0[disc.fixed] = problem.fixed_values(new)
+            else:
+                u0 = linear_predictor(problem, state, new, solver)
+                if u0 is None:
+                    u0 = state.u.copy()
+            u0[disc.fixed] = problem.prescribed(new)
             res = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
-            if not res.converged and prev is not None:
-                # retry from the last converged state without the predictor
-                u0 = state.u.copy()
-                u0[disc.fixed] = problem.fixed_values(new)
+            if not res.converged and extrapolated:
+                # retry from the linearised predictor instead of the extrapolation
+                u0 = linear_predictor(problem, state, new, solver)
+                if u0 is None:
+                    u0 = state.u.copy()
+                u0[disc.fixed] = problem.prescribed(new)
                 res2 = newton(problem, state, u0, new, rtol=rtol, maxit=maxit, solver=solver)
                 res2.assembly_time += res.assembly_time
                 res2.solve_time += res.solve_time
@@ -327,6 +524,10 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
                 state = commit(state, res)
                 lam = new
                 step = min(max_increment, 1.5 * step)
+                gone = problem.delete_failed(state)
+                if len(gone):
+                    rec["deleted"] = np.concatenate([rec["deleted"], gone])
+                    prev = None  # the failure is no trend to extrapolate
             else:
                 step *= 0.5
                 if step < min_increment * max(1.0, abs(target)):
