@@ -11,10 +11,10 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   exactly ∫S:dE, the undamaged elastic law is the library's Saint Venant–Kirchhoff law (law 0), and
   its tangent is a short formula. At mortar strains (≤ 2·10⁻²) E differs from the Hencky strain by
   O(ε²) (< 1 %); large compressions, where SVK softens, are not the mortar's regime.
-* Damage (003 §3.2 steps (1)–(3), Fig. 9, eq. 6): principal elastic strains e_A, n_A of E_e by an
-  eigen-analysis; along each tensile principal direction with e_A > ε_cr = f_t/E the damage
+* Damage (003 §3.2 steps (1)–(3), Fig. 9, eq. 6): principal elastic strains e_A, n_A of the
+  step's trial elastic strain by an eigen-analysis; along each tensile principal direction with e_A > ε_cr = f_t/E the damage
   D_A = 1 − φ(e_A) (:func:`reduction_factor`); the damage is kept as a symmetric tensor Ω in the
-  reference frame (the paper's D^L "rotated to the global axes by direction cosines", eq. below),
+  reference frame (the paper's D^L "rotated to the global axes by direction cosines"),
   and "the largest value reached is kept" along every current principal direction:
   Ω ← Ω + max(0, D_A − n_A·Ω·n_A) n_A⊗n_A (:func:`update_damage`). The n_A are orthonormal, so
   raising one direction leaves n_B·Ω·n_B of the others unchanged; for directions that do not rotate
@@ -30,8 +30,8 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   stress along a damaged axis the compliance of this matrix is 1/(φ²E): σ = α_xx E ε exactly, which
   is what lets eq. 6–7 carry the softening curve of Fig. 8.
 * Tension only (003: "these reductions act in tension only, not in compression"): the normal
-  factor of axis i is φ̂_i = φ_i while the crack is open (m_i·E_e·m_i > 0, decided on the trial
-  elastic strain of the step) and 1 once it closes, so a closed crack carries compression as
+  factor of axis i is φ̂_i = φ_i while the crack is open (m_i·E_e·m_i > 0, read from the trial
+  elastic strain of the step, see "Order in a step") and 1 once it closes, so a closed crack carries compression as
   virgin mortar; damage never grows from compressive strain. The shear factors keep φ̃ (open or
   closed): then the stored energy is continuous when a crack closes (only the normal terms switch,
   and they switch where e'_ii = 0), and no energy is created by closure. (Full recovery of the
@@ -60,12 +60,24 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   eigenvalue of Ω has reached 1 (a direction with φ = 0), else 0.0.
 * Compression: associative Mises plasticity on S with linear isotropic hardening,
   σ_y = f_c + H ε̄_p, H = E/99 by default (uniaxial post-yield slope E H/(E + H) = E/100, Fig. 14).
-  Return mapping (:func:`mises_return`): elastic trial S_tr = 𝒞:(E − E_p,n) with the step's
-  degraded matrix 𝒞; flow direction n = (3/2) s_tr/q_tr of the trial stress; Δγ solves
-  q(S_tr − Δγ 𝒞:n) = σ_y(ε̄_p,n + Δγ), a quadratic in Δγ. For the undamaged (isotropic) matrix
-  𝒞:n ∥ s_tr and this is the exact radial return; for a damaged (anisotropic) matrix the flow
-  direction is the trial one, first order in the step, and the final stress is on the yield surface.
-  Order in a step: damage from the trial elastic strain, then the return with that damage.
+  Return mapping (:func:`closest_point_return`): elastic trial S_tr = 𝒞:(E − E_p,n) with the
+  step's degraded matrix 𝒞, then backward Euler, S + Δγ 𝒞:n(S) = S_tr and
+  q(S) = σ_y(ε̄_p,n + Δγ), n = (3/2) s/q, i.e. the closest-point projection in the metric of 𝒞,
+  by Newton on (S, Δγ) with backtracking, started from the step along the trial direction
+  (:func:`trial_direction_step`, a quadratic in Δγ). For the undamaged (isotropic) matrix that
+  start is the radial return and already the solution. (The trial-direction step alone has no root
+  for about one in six strongly damaged states: the Newton is needed there.)
+  Order in a step (the state is explicit in the step): the damage is raised and the open/closed
+  state read from the trial elastic strain E − E_p,n, then the return is made with them. This is
+  exact for elastic steps (the trial is the final elastic strain; a damaging step included) and
+  for plastic steps that change neither. Where flow and cracking act in the same step, the damage
+  is driven by the trial elastic strain (first order in the step: too much where the flow undoes
+  a tensile elastic strain) and a crack that the return closes or opens keeps its trial state.
+  (Iterating damage, open/closed state and return to a fixed point was tried: on heavily cracked
+  points the softening–flow feedback converges slowly and a crack at closure alternates between
+  its states — the consistent state lies on the switch, where σ'_ii is undetermined — so it did
+  not settle within a few passes for ~40 % of such points. The explicit state is the documented
+  choice.)
 * Energies per unit reference volume: stored W = ½ E_e:𝒞:E_e (:func:`mortar_energy`), a
   hyperelastic potential at fixed damage; plastic work ΔW_p = (σ_y,n + ½HΔγ)Δγ (= ∫σ_y dε̄_p,
   exact for linear hardening); released (cracking) energy ΔW_r = W(E_m; Ω_n) − W(E_m; Ω_n+1), the
@@ -73,10 +85,11 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   E_m = ½(E_e,n + E_e,n+1) of the step's elastic strains (E_e,n is kept in the history): the
   midpoint rule for ∫ −½ E_e:d𝒞:E_e, second order in the step (along a uniaxial release in equal
   steps Δε its sum exceeds the exact ½ f_t ε_0 by exactly EΔε²/8). Then ∫S:dE ≈ W + W_p + W_r.
-* Tangent A = dP/dF: exact for the algorithm at fixed damage (elastic steps, plastic steps: the
-  consistent tangent of the return above, which is the classical one when undamaged); in a step
-  where the damage grows the damage is held at its new value (secant in the damage), so A is the
-  degraded tangent, not the softening one. The unilateral switch is held at its trial state.
+* Tangent A = dP/dF: exact for the algorithm at fixed damage (elastic steps; plastic steps: the
+  consistent tangent of the return, dS/dE = (J⁻¹)_SS 𝒞 with J the Newton matrix at the solution,
+  the classical one when undamaged); in a step where the damage grows the damage is held at its new
+  value (secant in the damage), so A is the degraded tangent, not the softening one. The
+  open/closed state is held (exact away from e'_ii = 0).
 
 Parameter slots (``prm``, law 4): 0 law code 4; 1 Lamé λ, Pa; 2 μ, Pa; 3 f_t, Pa; 4 release strain
 ε_0, -; 5 f_c (initial Mises yield stress), Pa; 6 hardening modulus H, Pa; 7 φ_min, -; 8 unused;
@@ -107,7 +120,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .kernels import INVERTED, JIT, NOT_CONVERGED, OK, _cofactor, _fail, eig_sym3, svk_point
+from .kernels import (INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor, _fail, eig_sym3,
+                      svk_point)
 
 LAW_CODE = 4
 N_HISTORY = 23
@@ -124,6 +138,7 @@ H_EE = 17         # elastic strain at the end of the step, 6 columns
 _VI = (0, 1, 2, 1, 0, 0)
 _VJ = (0, 1, 2, 2, 2, 1)
 SQRT2 = math.sqrt(2.0)
+DAMAGE_RESOLUTION = 1e-13  # smaller raises are round-off of n·Ω·n (~1e-16), not damage
 
 
 # --------------------------------------------------------------------------------------------
@@ -211,13 +226,15 @@ def update_damage(Ee, Om, eps_cr, eps_0, a, V):
 
     Ee (3, 3): elastic Green–Lagrange strain; Om (3, 3): damage tensor Ω (reference frame),
     raised along each principal direction n_A of Ee with e_A > ε_cr to D_A = 1 − φ(e_A) where
-    n_A·Ω·n_A is lower: Ω += (D_A − n_A·Ω·n_A) n_A⊗n_A. a, V (3, 3): scratch.
-    Returns (grew, reached): Ω changed; some e_A ≥ ε_0 (fully released direction)."""
+    n_A·Ω·n_A is lower (by more than :data:`DAMAGE_RESOLUTION`):
+    Ω += (D_A − n_A·Ω·n_A) n_A⊗n_A. a, V (3, 3): scratch.
+    Returns (largest raise, reached): the largest D_A − n_A·Ω·n_A applied (0.0: Ω unchanged);
+    some e_A ≥ ε_0 (fully released direction)."""
     for i in range(3):
         for j in range(3):
             a[i, j] = Ee[i, j]
     eig_sym3(a, V)
-    grew = False
+    grew = 0.0
     reached = False
     for A_ in range(3):
         e = a[A_, A_]
@@ -229,12 +246,12 @@ def update_damage(Ee, Om, eps_cr, eps_0, a, V):
             for i in range(3):
                 for j in range(3):
                     cur += V[i, A_] * Om[i, j] * V[j, A_]
-            if d > cur:
+            if d > cur + DAMAGE_RESOLUTION:
                 inc = d - cur
                 for i in range(3):
                     for j in range(3):
                         Om[i, j] += inc * V[i, A_] * V[j, A_]
-                grew = True
+                grew = max(grew, inc)
     return grew, reached
 
 
@@ -337,29 +354,6 @@ def _dev(a, out):
 
 
 @njit(**JIT)
-def mises_return(q_tr, sy, H, s_tr, s_a):
-    """Plastic multiplier of the return along the trial flow direction (module docstring):
-    the smallest Δγ > 0 with q(Δγ)² = (3/2)|s_tr − Δγ s_a|² = (σ_y + HΔγ)², s_a = dev 𝒞:n, a
-    quadratic a2 Δγ² + a1 Δγ + a0 = 0 solved in its cancellation-free form 2a0/(−a1 + √disc).
-    For the isotropic matrix this is Δγ = (q_tr − σ_y)/(3μ + H), the radial return.
-    Returns (Δγ, ok); ok False when no root (then the linearised Δγ is returned)."""
-    ss = _ddot(s_tr, s_a)
-    aa = _ddot(s_a, s_a)
-    a2 = 1.5 * aa - H * H
-    a1 = -(3.0 * ss + 2.0 * H * sy)
-    a0 = q_tr * q_tr - sy * sy
-    disc = a1 * a1 - 4.0 * a2 * a0
-    den = -a1 + math.sqrt(max(disc, 0.0))
-    if disc >= 0.0 and den > 0.0:
-        return 2.0 * a0 / den, True
-    # no intersection along this direction: the first-order step (n:𝒞:n = (3/2) s_tr:s_a / q_tr)
-    return (q_tr - sy) / (1.5 * ss / q_tr + H), False
-
-
-# --------------------------------------------------------------------------------------------
-# tangent
-# --------------------------------------------------------------------------------------------
-@njit(**JIT)
 def _mandel(t, v):
     """Mandel vector of a symmetric 3×3 tensor: (xx, yy, zz, √2 yz, √2 xz, √2 xy)."""
     v[0] = t[0, 0]
@@ -370,18 +364,24 @@ def _mandel(t, v):
     v[5] = SQRT2 * t[0, 1]
 
 
+@njit(**JIT)
+def _unmandel(v, t):
+    """The symmetric 3×3 tensor of a Mandel vector."""
+    t[0, 0] = v[0]
+    t[1, 1] = v[1]
+    t[2, 2] = v[2]
+    t[1, 2] = t[2, 1] = v[3] / SQRT2
+    t[0, 2] = t[2, 0] = v[4] / SQRT2
+    t[0, 1] = t[1, 0] = v[5] / SQRT2
+
+
 _MI = ((0, 5, 4), (5, 1, 3), (4, 3, 2))  # Mandel index of the pair (i, j)
 
 
 @njit(**JIT)
-def algorithmic_moduli(Q, st, lam, mu, plastic, dg, q_tr, H, q_f, nf, am, s_tr, s_a, B, tmp, Sb,
-                       D, M, vv):
-    """dS/dE of the step as a Mandel 6×6 matrix D (out), at the step's damage and open/closed
-    state. Elastic: the degraded matrix 𝒞 of eq. 8 (its columns are eq. 8 applied to the Mandel
-    basis). Plastic, with n = (3/2)s_tr/q_tr, a = 𝒞:n, s_a = dev a, s_f = s_tr − Δγ s_a:
-    dn = N dE, N = (3/2q_tr)(I − ⅔ n⊗n) P_dev 𝒞;  dΔγ = g·dE,
-    g = 3(𝒞 s_f − Δγ Nᵀ𝒞 s_f)/(3 s_f:s_a + 2 q_f H);  D = 𝒞 − a⊗g − Δγ 𝒞 N.
-    B, tmp, Sb (3, 3), M (3, 6, 6), vv (6, 6): scratch."""
+def degraded_moduli(Q, st, lam, mu, B, tmp, Sb, v, C):
+    """The matrix 𝒞 of eq. 8 in the reference frame, as a Mandel matrix C[0:6, 0:6] (out): its
+    columns are eq. 8 applied to the Mandel basis tensors. B, tmp, Sb (3, 3), v (≥ 6,) scratch."""
     for J_ in range(6):
         for i in range(3):
             for j in range(3):
@@ -394,61 +394,155 @@ def algorithmic_moduli(Q, st, lam, mu, plastic, dg, q_tr, H, q_f, nf, am, s_tr, 
             B[i, j] = 1.0 / SQRT2
             B[j, i] = 1.0 / SQRT2
         degraded_stress(B, Q, st, lam, mu, tmp, Sb)
-        _mandel(Sb, vv[0])
+        _mandel(Sb, v)
         for I_ in range(6):
-            D[I_, J_] = vv[0, I_]
-    if not plastic:
-        return
-    C = M[0]
-    N = M[1]
-    PC = M[2]
+            C[I_, J_] = v[I_]
+
+
+@njit(**JIT)
+def _isotropic_moduli(lam, mu, C):
+    """Undamaged 𝒞 = λ 1⊗1 + 2μ I as a Mandel matrix C[0:6, 0:6] (out)."""
     for I_ in range(6):
         for J_ in range(6):
-            C[I_, J_] = D[I_, J_]
-    nv = vv[0]
-    av = vv[1]
-    sav = vv[2]
-    sfv = vv[3]
-    w1 = vv[4]
-    g = vv[5]
-    _mandel(nf, nv)
-    _mandel(am, av)
-    _mandel(s_a, sav)
-    _mandel(s_tr, sfv)
+            C[I_, J_] = (lam if (I_ < 3 and J_ < 3) else 0.0) + (2.0 * mu if I_ == J_ else 0.0)
+
+
+@njit(**JIT)
+def trial_direction_step(q_tr, sy, H, s_tr, s_a):
+    """Starting point of the return: the smallest Δγ > 0 with
+    (3/2)|s_tr − Δγ s_a|² = (σ_y + HΔγ)² along the trial flow direction n_tr = (3/2)s_tr/q_tr,
+    s_a = dev 𝒞:n_tr (Mandel vectors), a quadratic solved in its cancellation-free form. For the
+    isotropic matrix s_a ∥ s_tr and this is the radial return Δγ = (q_tr − σ_y)/(3μ + H), the
+    exact solution. Returns (Δγ, found)."""
+    ss = 0.0
+    aa = 0.0
     for I_ in range(6):
-        sfv[I_] -= dg * sav[I_]
-    # P_dev 𝒞
-    for J_ in range(6):
-        t3 = (C[0, J_] + C[1, J_] + C[2, J_]) / 3.0
+        ss += s_tr[I_] * s_a[I_]
+        aa += s_a[I_] * s_a[I_]
+    a2 = 1.5 * aa - H * H
+    a1 = -(3.0 * ss + 2.0 * H * sy)
+    a0 = q_tr * q_tr - sy * sy
+    disc = a1 * a1 - 4.0 * a2 * a0
+    den = -a1 + math.sqrt(max(disc, 0.0))
+    if disc >= 0.0 and den > 0.0:
+        return 2.0 * a0 / den, True
+    return 0.0, False
+
+
+@njit(**JIT)
+def _mises_residual(C, sig, sig_tr, dg, sy_n, H, n, Cn, r):
+    """Residual of the return (Mandel vectors): r[0:6] = σ − σ_tr + Δγ 𝒞n, r[6] = q − σ_y,n − HΔγ,
+    with n = (3/2) dev σ / q written to n and 𝒞n to Cn. Returns (|r|, q)."""
+    tr3 = (sig[0] + sig[1] + sig[2]) / 3.0
+    ss = 0.0
+    for I_ in range(6):
+        s = sig[I_] - (tr3 if I_ < 3 else 0.0)
+        n[I_] = s
+        ss += s * s
+    q = math.sqrt(1.5 * ss)
+    c = 1.5 / q
+    for I_ in range(6):
+        n[I_] *= c
+    norm = 0.0
+    for I_ in range(6):
+        v = 0.0
+        for K in range(6):
+            v += C[I_, K] * n[K]
+        Cn[I_] = v
+        r[I_] = sig[I_] - sig_tr[I_] + dg * v
+        norm += r[I_] * r[I_]
+    r[6] = q - sy_n - H * dg
+    return math.sqrt(norm + r[6] * r[6]), q
+
+
+@njit(**JIT)
+def _mises_jacobian(C, dg, q, n, Cn, H, Jm):
+    """∂r/∂(σ, Δγ) = [[I + Δγ 𝒞N, 𝒞n], [nᵀ, −H]] with N = ∂n/∂σ = (3/2q)(P_dev − ⅔ n⊗n), so
+    (𝒞N)_IK = (3/2q)(C_IK − [K normal] ⅓ Σ_L normal C_IL − ⅔ (𝒞n)_I n_K). Jm (7, 7) out."""
+    c = 1.5 / q
+    for I_ in range(6):
+        row3 = (C[I_, 0] + C[I_, 1] + C[I_, 2]) / 3.0
+        for K in range(6):
+            CN = c * (C[I_, K] - (row3 if K < 3 else 0.0) - 2.0 / 3.0 * Cn[I_] * n[K])
+            Jm[I_, K] = (1.0 if I_ == K else 0.0) + dg * CN
+        Jm[I_, 6] = Cn[I_]
+        Jm[6, I_] = n[I_]
+    Jm[6, 6] = -H
+
+
+@njit(**JIT)
+def _gauss_solve(Jm, X, nrhs):
+    """Solve Jm Y = X[:, :nrhs] in place (7 × 7, Gaussian elimination with partial pivoting);
+    Jm is destroyed, X holds Y. Returns False if a pivot is zero."""
+    n = 7
+    for k in range(n):
+        p = k
+        big = abs(Jm[k, k])
+        for i in range(k + 1, n):
+            if abs(Jm[i, k]) > big:
+                big = abs(Jm[i, k])
+                p = i
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(k, n):
+                t = Jm[k, j]
+                Jm[k, j] = Jm[p, j]
+                Jm[p, j] = t
+            for j in range(nrhs):
+                t = X[k, j]
+                X[k, j] = X[p, j]
+                X[p, j] = t
+        for i in range(k + 1, n):
+            f = Jm[i, k] / Jm[k, k]
+            for j in range(k + 1, n):
+                Jm[i, j] -= f * Jm[k, j]
+            for j in range(nrhs):
+                X[i, j] -= f * X[k, j]
+    for k in range(n - 1, -1, -1):
+        for j in range(nrhs):
+            s = X[k, j]
+            for i in range(k + 1, n):
+                s -= Jm[k, i] * X[i, j]
+            X[k, j] = s / Jm[k, k]
+    return True
+
+
+@njit(**JIT)
+def closest_point_return(C, sig_tr, sy_n, H, tol, dg, sig, n, Cn, r, Jm, X, sig_try):
+    """Mises plasticity of 003 §3.3 by backward Euler, the closest-point projection in the metric
+    of the degraded matrix 𝒞 (Mandel C): σ + Δγ 𝒞:n(σ) = σ_tr, q(σ) = σ_y,n + HΔγ, by Newton on
+    (σ, Δγ) with backtracking on |r|, from the start (sig, dg) given (the trial-direction step:
+    for the isotropic matrix already the solution). sig (6,) in: start, out: solution; n, Cn:
+    n(σ) and 𝒞n at the solution. Returns (Δγ, converged, q)."""
+    big = 0.0
+    for I_ in range(6):
+        big = max(big, abs(sig_tr[I_]))
+    scale = tol * sy_n + 64.0 * 2.2e-16 * big  # requested accuracy, or round-off of r
+    res, q = _mises_residual(C, sig, sig_tr, dg, sy_n, H, n, Cn, r)
+    for it in range(NEWTON_MAXIT):
+        if res <= scale:
+            return dg, True, q
+        _mises_jacobian(C, dg, q, n, Cn, H, Jm)
+        for i in range(7):
+            X[i, 0] = -r[i]
+        if not _gauss_solve(Jm, X, 1):
+            return dg, False, q
+        step = 1.0
+        for ls in range(40):
+            for I_ in range(6):
+                sig_try[I_] = sig[I_] + step * X[I_, 0]
+            dg_try = max(dg + step * X[6, 0], 0.0)
+            res_try, q_try = _mises_residual(C, sig_try, sig_tr, dg_try, sy_n, H, n, Cn, r)
+            if res_try < res:
+                break
+            step *= 0.5
         for I_ in range(6):
-            PC[I_, J_] = C[I_, J_] - (t3 if I_ < 3 else 0.0)
-    # N = (3/2q)(PC − ⅔ n (nᵀ PC))
-    c = 1.5 / q_tr
-    for J_ in range(6):
-        nPC = 0.0
-        for K in range(6):
-            nPC += nv[K] * PC[K, J_]
-        for I_ in range(6):
-            N[I_, J_] = c * (PC[I_, J_] - 2.0 / 3.0 * nv[I_] * nPC)
-    # w1 = 𝒞 s_f; g = 3(w1 − Δγ Nᵀ w1)/den
-    den = 2.0 * q_f * H
-    for I_ in range(6):
-        den += 3.0 * sfv[I_] * sav[I_]
-        s = 0.0
-        for K in range(6):
-            s += C[I_, K] * sfv[K]
-        w1[I_] = s
-    for I_ in range(6):
-        s = 0.0
-        for K in range(6):
-            s += N[K, I_] * w1[K]
-        g[I_] = 3.0 * (w1[I_] - dg * s) / den
-    for I_ in range(6):
-        for J_ in range(6):
-            CN = 0.0
-            for K in range(6):
-                CN += C[I_, K] * N[K, J_]
-            D[I_, J_] = C[I_, J_] - av[I_] * g[J_] - dg * CN
+            sig[I_] = sig_try[I_]
+        dg = dg_try
+        res = res_try
+        q = q_try
+    return dg, res <= scale, q
 
 
 @njit(**JIT)
@@ -524,14 +618,50 @@ def _identity_frame(Q, phi):
 
 
 @njit(**JIT)
+def _return(Cm, S, s_tr, q_tr, sy, H, tol, vecs, Jm, X, nf):
+    """The plastic corrector of one pass: the start along the trial direction, then
+    :func:`closest_point_return`. S (3, 3) in: trial stress, out: returned stress; nf (3, 3) out:
+    the flow direction n at the solution; vecs rows 2, 3 out: n and 𝒞n (Mandel) for the tangent.
+    Returns (Δγ, converged, q)."""
+    sig_tr = vecs[0]
+    sig = vecs[1]
+    nv = vecs[2]
+    Cn = vecs[3]
+    r = vecs[4]
+    sig_try = vecs[5]
+    s_trv = vecs[6]
+    s_av = vecs[7]
+    _mandel(S, sig_tr)
+    _mandel(s_tr, s_trv)
+    c = 1.5 / q_tr
+    for I_ in range(6):
+        nv[I_] = c * s_trv[I_]
+    for I_ in range(6):
+        v = 0.0
+        for K in range(6):
+            v += Cm[I_, K] * nv[K]
+        Cn[I_] = v
+    t3 = (Cn[0] + Cn[1] + Cn[2]) / 3.0
+    for I_ in range(6):
+        s_av[I_] = Cn[I_] - (t3 if I_ < 3 else 0.0)
+    dg0, found = trial_direction_step(q_tr, sy, H, s_trv, s_av)
+    for I_ in range(6):
+        sig[I_] = sig_tr[I_] - dg0 * Cn[I_]
+    dg, conv, q_f = closest_point_return(Cm, sig_tr, sy, H, tol, dg0, sig, nv, Cn, r, Jm, X,
+                                         sig_try)
+    _unmandel(sig, S)
+    _unmandel(nv, nf)
+    return dg, conv, q_f
+
+
+@njit(**JIT)
 def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     """003 mortar at one point (module docstring). F (3, 3); h_old (≥ 23,) history (columns beyond
     23 are copied to h_new); prm (≥ 10,) parameter row. Out, in place: P (3, 3) first
     Piola–Kirchhoff stress, Pa; h_new; with ``want_tangent`` A (3, 3, 3, 3) = ∂P_ij/∂F_kl, Pa
-    (exact at fixed damage, see the module docstring). Returns the status: 0 ok; 1 the return found
-    no root along the trial direction (the linearised step is taken); 2 J ≤ 0 (P = NaN, history
-    copied). Virgin elastic points take an allocation-free path (the SVK law, law 0); the others
-    one small scratch allocation (three more with the tangent)."""
+    (exact at fixed damage, see the module docstring). Returns the status: 0 ok; 1 the Newton of
+    the return did not converge (its last iterate is taken); 2 J ≤ 0 (P = NaN, history copied). Virgin elastic
+    points take an allocation-free path (the SVK law, law 0); the others one scratch allocation."""
     lam = prm[1]
     mu = prm[2]
     ft = prm[3]
@@ -578,16 +708,15 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
                 h_new[H_EE + 5] = e01
                 return svk_point(F, prm, P, A, want_tangent)
 
-    w = np.empty((19, 3, 3))
-    Ee = w[0]      # elastic strain: trial, then final
-    Etr = w[1]     # trial elastic strain (decides open/closed)
+    buf = np.empty(19 * 9 + 3 * 49 + 8 * 7)  # one scratch allocation
+    w = buf[0:171].reshape((19, 3, 3))
+    Ee = w[0]      # elastic strain of the step (final)
+    Etr = w[1]     # trial elastic strain E − E_p,n
     Om = w[2]      # damage tensor
     Q = w[3]       # damage axes (columns)
     S = w[4]       # second Piola–Kirchhoff stress
     nf = w[5]      # flow direction n
-    am = w[6]      # 𝒞 : n
-    s_tr = w[7]
-    s_a = w[8]
+    s_tr = w[7]    # trial deviator
     tmp = w[9]
     a = w[10]
     V = w[11]
@@ -599,18 +728,21 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     phio = w[16, 1]
     Em = w[17]              # midpoint elastic strain of the step (released energy)
     stm = w[18].reshape(9)
+    Cm = buf[171:220].reshape((7, 7))   # 𝒞 as a Mandel matrix (6×6 used)
+    Jm = buf[220:269].reshape((7, 7))   # Newton matrix of the return
+    X = buf[269:318].reshape((7, 7))    # its solutions
+    vecs = buf[318:374].reshape((8, 7))
 
-    _elastic_strain(F, h_old, Ee)
+    _elastic_strain(F, h_old, Etr)
     _load_omega(h_old, Om)
-    for i in range(3):
-        for j in range(3):
-            Etr[i, j] = Ee[i, j]
 
-    # damage: eq. 6 along the principal directions, the largest value kept
+    # state of the step (explicit in the step): damage raised along the principal directions of
+    # the trial elastic strain (eq. 6, Fig. 9, the largest value kept), open/closed read from it
     grew = False
     reached = False
-    if _max_eig_bound(Ee) > eps_cr:
-        grew, reached = update_damage(Ee, Om, eps_cr, eps0, a, V)
+    if _max_eig_bound(Etr) > eps_cr:
+        raise_, reached = update_damage(Etr, Om, eps_cr, eps0, a, V)
+        grew = raise_ > 0.0
     damaged = damaged_n or grew
     wmax = 0.0
     if damaged:
@@ -619,28 +751,27 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
         _identity_frame(Q, phi)
     release_state(Q, phi, phi_min, Etr, st)
 
-    # elastic trial (eq. 8), then the Mises check and return
-    degraded_stress(Ee, Q, st, lam, mu, tmp, S)
+    # elastic trial (eq. 8), Mises check, closest-point return with the step's matrix
+    degraded_stress(Etr, Q, st, lam, mu, tmp, S)
     _dev(S, s_tr)
     q_tr = math.sqrt(1.5 * _ddot(s_tr, s_tr))
     sy = fc + H * ebar_n
     plastic = q_tr - sy > tol * sy
     dg = 0.0
+    q_f = 0.0
     status = OK
+    if plastic or want_tangent:
+        if damaged:
+            degraded_moduli(Q, st, lam, mu, a, tmp, V, vecs[7], Cm)
+        else:
+            _isotropic_moduli(lam, mu, Cm)
     if plastic:
-        c = 1.5 / q_tr
-        for i in range(3):
-            for j in range(3):
-                nf[i, j] = c * s_tr[i, j]
-        degraded_stress(nf, Q, st, lam, mu, tmp, am)
-        _dev(am, s_a)
-        dg, ok = mises_return(q_tr, sy, H, s_tr, s_a)
-        if not ok:
+        dg, conv, q_f = _return(Cm, S, s_tr, q_tr, sy, H, tol, vecs, Jm, X, nf)
+        if not conv:
             status = NOT_CONVERGED
-        for i in range(3):
-            for j in range(3):
-                Ee[i, j] -= dg * nf[i, j]
-                S[i, j] -= dg * am[i, j]
+    for i in range(3):
+        for j in range(3):
+            Ee[i, j] = Etr[i, j] - dg * nf[i, j] if plastic else Etr[i, j]
 
     # energies per unit reference volume
     W_p = h_old[H_W_PLASTIC] + (sy + 0.5 * H * dg) * dg
@@ -682,12 +813,16 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     h_new[H_RELEASED] = 1.0 if released else 0.0
 
     if want_tangent:
-        M = np.empty((3, 6, 6))
-        D = np.empty((6, 6))
-        vv = np.empty((6, 6))
-        algorithmic_moduli(Q, st, lam, mu, plastic, dg, q_tr, H, sy + H * dg, nf, am, s_tr, s_a,
-                           a, tmp, V, D, M, vv)
-        _first_piola_tangent(F, S, D, A)
+        if plastic:
+            # consistent tangent of the return: J [dσ; dΔγ] = [𝒞 dE; 0], so dS/dE = (J⁻¹)_σσ 𝒞
+            _mises_jacobian(Cm, dg, q_f, vecs[2], vecs[3], H, Jm)  # at the solution
+            for I_ in range(7):
+                for J_ in range(6):
+                    X[I_, J_] = Cm[I_, J_] if I_ < 6 else 0.0
+            _gauss_solve(Jm, X, 6)
+            _first_piola_tangent(F, S, X, A)
+        else:
+            _first_piola_tangent(F, S, Cm, A)
     return status
 
 
