@@ -661,7 +661,8 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     Piola–Kirchhoff stress, Pa; h_new; with ``want_tangent`` A (3, 3, 3, 3) = ∂P_ij/∂F_kl, Pa
     (exact at fixed damage, see the module docstring). Returns the status: 0 ok; 1 the Newton of
     the return did not converge (its last iterate is taken); 2 J ≤ 0 (P = NaN, history copied). Virgin elastic
-    points take an allocation-free path (the SVK law, law 0); the others one scratch allocation."""
+    points take an allocation-free path (the SVK law, law 0); the others one scratch allocation,
+    two for a plastic step or with the tangent."""
     lam = prm[1]
     mu = prm[2]
     ft = prm[3]
@@ -708,8 +709,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
                 h_new[H_EE + 5] = e01
                 return svk_point(F, prm, P, A, want_tangent)
 
-    buf = np.empty(19 * 9 + 3 * 49 + 8 * 7)  # one scratch allocation
-    w = buf[0:171].reshape((19, 3, 3))
+    w = np.empty((19, 3, 3))  # scratch (one more allocation for a plastic step or the tangent)
     Ee = w[0]      # elastic strain of the step (final)
     Etr = w[1]     # trial elastic strain E − E_p,n
     Om = w[2]      # damage tensor
@@ -728,10 +728,6 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     phio = w[16, 1]
     Em = w[17]              # midpoint elastic strain of the step (released energy)
     stm = w[18].reshape(9)
-    Cm = buf[171:220].reshape((7, 7))   # 𝒞 as a Mandel matrix (6×6 used)
-    Jm = buf[220:269].reshape((7, 7))   # Newton matrix of the return
-    X = buf[269:318].reshape((7, 7))    # its solutions
-    vecs = buf[318:374].reshape((8, 7))
 
     _elastic_strain(F, h_old, Etr)
     _load_omega(h_old, Om)
@@ -761,6 +757,11 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     q_f = 0.0
     status = OK
     if plastic or want_tangent:
+        buf = np.empty(3 * 49 + 8 * 7)
+        Cm = buf[0:49].reshape((7, 7))      # 𝒞 as a Mandel matrix (6×6 used)
+        Jm = buf[49:98].reshape((7, 7))     # Newton matrix of the return
+        X = buf[98:147].reshape((7, 7))     # its solutions
+        vecs = buf[147:203].reshape((8, 7))
         if damaged:
             degraded_moduli(Q, st, lam, mu, a, tmp, V, vecs[7], Cm)
         else:
