@@ -507,9 +507,6 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     return status
 
 
-from . import mortar as _mortar  # noqa: E402  (law 4; it imports JIT and the helpers above)
-
-
 # --------------------------------------------------------------------------------------------
 # public entry points
 # --------------------------------------------------------------------------------------------
@@ -619,3 +616,8 @@ def material_points_tangent(F, h_old, prm, mat_id):
     status = np.empty(N, dtype=np.int64)
     _points_into(F, h_old, prm, mat_id, P, h_new, A, status, bool(True))  # plain bool, see above
     return P, A, h_new, status
+
+
+# law 4 (paper 003's mortar) lives in its own module, which imports JIT and the helpers above;
+# numba resolves ``_mortar.mortar_point`` when the loops above are first compiled
+from . import mortar as _mortar  # noqa: E402
