@@ -28,9 +28,6 @@ TOL_LAT = 1e-9      # lateral stretch solved by brentq to 1e-15 in λ: δS ~ (λ
                     # i.e. ~1e-11 of f_t; 1e-9 leaves room for the eigen-solves
 TOL_FD = 1e-6       # central differences at step 1e-7 of F: truncation O(h²) ≪ 1e-9 (piecewise
                     # polynomial law away from its switches), round-off eps·|P|/(h|A|) ~ 1e-9
-# Near ε_0 the release law has φ ∝ √(ε_0 − κ): a principal strain κ off by round-off δκ ≲ 1e-15
-# (GL strain from F and the Jacobi solve, ~1e-16, with margin) moves φ by up to DPHI_EPS0 there.
-DPHI_EPS0 = math.sqrt(1.5e6 / 11.9e9 * 1e-15 / (0.017 * 0.0169))  # ≈ 2e-8
 
 E = M.E
 NU = M.nu
@@ -42,6 +39,9 @@ H = M.H_c
 LAM = M.lam
 MU = M.mu
 KBULK = LAM + 2 * MU / 3
+# Near ε_0 the release law has φ ∝ √(ε_0 − κ): a principal strain κ off by round-off δκ ≲ 1e-15
+# (GL strain from F and the Jacobi solve, ~1e-16, with margin) moves φ by up to DPHI_EPS0 there.
+DPHI_EPS0 = math.sqrt(EPS_CR * 1e-15 / (EPS0 * (EPS0 - EPS_CR)))  # ≈ 2e-8
 
 
 @pytest.fixture(autouse=True, scope="module")
