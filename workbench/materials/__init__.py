@@ -8,7 +8,8 @@ vector ``prm`` that the numba point routines in :mod:`workbench.materials.kernel
 slot  meaning
 ====  ==========================================================================
 0     law code: 0 Saint Venant–Kirchhoff, 1 compressible neo-Hookean,
-      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky + Swift)
+      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky + Swift),
+      4 mortar of 003 (slots 3–9 its own: :mod:`workbench.materials.mortar`)
 1     Lamé λ, Pa (for law 2: the λ of eq. 12)
 2     shear modulus μ, Pa (law 2: unused, its small-strain value is c1 + c2)
 3     Swift C, Pa            (law 3)
@@ -34,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
+LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3, "mortar": 4}
 N_PARAMS = 10
 N_HISTORY_J2 = 11
 HIST_EPS_P = 9
@@ -62,6 +63,11 @@ class Material:
     c2: float = 0.0
     lam_mr: float = 0.0
     tol: float = 1e-12
+    f_t: float = 0.0          # mortar (law 4): tensile strength, Pa
+    f_c: float = 0.0          # mortar: compressive strength (initial Mises yield), Pa
+    eps_release: float = 0.0  # mortar: strain of complete stress release, -
+    H_c: float = 0.0          # mortar: linear hardening modulus, Pa
+    phi_min: float = 0.05     # mortar: floor of the reduction factor φ
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -96,6 +102,27 @@ class Material:
         return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L).validated()
 
     @classmethod
+    def mortar(cls, E: float, nu: float, f_t: float, f_c: float, eps_release: float | None = None,
+               *, G_f: float | None = None, particle_size: float | None = None,
+               H_c: float | None = None, phi_min: float = 0.05, rho: float = 2200.0) -> "Material":
+        """Mortar of paper 003 (:mod:`workbench.materials.mortar`): tension softening by stress
+        release (eq. 5–7) on the degraded orthotropic matrix (eq. 8), Mises plasticity with linear
+        hardening H_c (default E/99: post-yield slope E/100 in uniaxial stress, Fig. 14). The
+        release strain is ``eps_release`` or, by eq. 5, 2 G_f/(f_t · particle_size) (G_f in J/m²,
+        particle_size in m). ρ = 2200 kg/m³ by default (003 gives none)."""
+        from .mortar import release_strain
+
+        if eps_release is None:
+            if G_f is None or particle_size is None:
+                raise ValueError("eps_release: give it, or both G_f and particle_size (eq. 5)")
+            eps_release = release_strain(E, f_t, G_f, particle_size)
+        elif G_f is not None or particle_size is not None:
+            raise ValueError("eps_release: give either eps_release or (G_f, particle_size), not both")
+        H_c = E / 99.0 if H_c is None else H_c
+        return cls(law="mortar", E=E, nu=nu, rho=rho, f_t=f_t, f_c=f_c, eps_release=eps_release,
+                   H_c=H_c, phi_min=phi_min).validated()
+
+    @classmethod
     def from_bulk_shear(cls, law: str, K: float, G: float, rho: float) -> "Material":
         E = 9 * K * G / (3 * K + G)
         nu = (3 * K - 2 * G) / (2 * (3 * K + G))
@@ -122,6 +149,10 @@ class Material:
                 raise ValueError(f"eps_L: {self.eps_L} is not allowed; strain limit must be > 0")
         if self.law == "mooney_rivlin" and not (self.c1 >= 0 and self.c2 >= 0 and self.c1 + self.c2 > 0):
             raise ValueError("c1, c2: must be >= 0 with c1 + c2 > 0")
+        if self.law == "mortar":
+            from .mortar import check_material
+
+            check_material(self)
         return self
 
     def replace(self, **changes) -> "Material":
@@ -156,6 +187,10 @@ class Material:
 
     @property
     def n_history(self) -> int:
+        if self.law == "mortar":
+            from .mortar import N_HISTORY
+
+            return N_HISTORY
         return N_HISTORY_J2 if self.law == "j2" else 0
 
     def params(self) -> np.ndarray:
@@ -168,6 +203,10 @@ class Material:
         p[6] = self.eps_L
         p[7], p[8] = self.c1, self.c2
         p[9] = self.tol
+        if self.law == "mortar":
+            from .mortar import pack_params
+
+            pack_params(self, p)
         return p
 
     def initial_history(self, n_points: int) -> np.ndarray:
@@ -185,6 +224,9 @@ class Material:
                      hardening_on="Kirchhoff stress")
         if self.law == "mooney_rivlin":
             d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
+        if self.law == "mortar":
+            d.update(f_t=self.f_t, f_c=self.f_c, eps_release=self.eps_release, H_c=self.H_c,
+                     phi_min=self.phi_min)
         return d
 
 

@@ -533,6 +533,8 @@ def material_point(F, h_old, prm, P, h_new, A, want_tangent):
         return mooney_rivlin_point(F, prm, P, A, want_tangent)
     if law == 3:
         return j2_point(F, h_old, prm, P, h_new, A, want_tangent)
+    if law == 4:
+        return _mortar.mortar_point(F, h_old, prm, P, h_new, A, want_tangent)
     _fail(P, A, want_tangent)
     return UNKNOWN_LAW
 
@@ -544,10 +546,12 @@ def _check(F, h_old, prm, mat_id):
     laws ignore and keep any history columns)."""
     for r in range(prm.shape[0]):
         law = int(prm[r, 0])
-        if law < 0 or law > 3:
+        if law < 0 or law > 4:
             raise ValueError("prm[:, 0]: unknown material law code")
         if law == 3 and h_old.shape[1] < 11:
             raise ValueError("h_old: J2 needs 11 history columns")
+        if law == 4 and h_old.shape[1] < _mortar.N_HISTORY:
+            raise ValueError("h_old: the mortar law needs 23 history columns")
     if F.shape[1] != 3 or F.shape[2] != 3 or h_old.shape[0] != F.shape[0]:
         raise ValueError("F must be (N, 3, 3) and h_old (N, n_history)")
     if mat_id.shape[0] != F.shape[0]:
@@ -577,6 +581,8 @@ def _points_into(F, h_old, prm, mat_id, P, h_new, A, status, want_tangent):
             status[n] = neo_hooke_point(F[n], row, P[n], A[m], want_tangent)
         elif law == 2:
             status[n] = mooney_rivlin_point(F[n], row, P[n], A[m], want_tangent)
+        elif law == 4:
+            status[n] = _mortar.mortar_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
         else:
             status[n] = j2_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
 
@@ -610,3 +616,8 @@ def material_points_tangent(F, h_old, prm, mat_id):
     status = np.empty(N, dtype=np.int64)
     _points_into(F, h_old, prm, mat_id, P, h_new, A, status, bool(True))  # plain bool, see above
     return P, A, h_new, status
+
+
+# law 4 (paper 003's mortar) lives in its own module, which imports JIT and the helpers above;
+# numba resolves ``_mortar.mortar_point`` when the loops above are first compiled
+from . import mortar as _mortar  # noqa: E402
