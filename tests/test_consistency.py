@@ -371,3 +371,144 @@ def test_consistent_gradients_rejects_bad_input():
         cs.pair_weights(X, disc.indptr, disc.indices, 0.5, "gauss")
     with pytest.raises(ValueError, match="mode"):
         cs.column_mask(~free, "all")
+
+
+def test_excluded_nodes_carry_no_volume_and_the_total_is_kept():
+    dx = 0.1
+    X, _ = lattice.grid((0.0, -0.3), (1.0, 0.3), dx, "node")
+    inside = cs.box_inside((0.0, -0.3), (1.0, 0.3), dx)
+    corner = np.isclose(X[:, 0], 0.0) & np.isclose(np.abs(X[:, 1]), 0.3)
+    for order in (1, 2):
+        V, _ = cs.boundary_normals(X, dx, inside, order=order)
+        Ve, _ = cs.boundary_normals(X, dx, inside, order=order, exclude=corner)
+        assert np.all(Ve[corner] == 0) and np.all(Ve >= 0)
+        assert abs(Ve.sum() - V.sum()) < 1e-15 and abs(V.sum() - 0.6) < 1e-14
+        moved = np.nonzero(Ve != V)[0]
+        assert len(moved) == 6  # the two corners and their two neighbours each
+
+
+# ------------------------------------------------------------------------------------------------
+# Accuracy: the plate (004 D), the cantilever (004 E), a free–free beam, a symmetry plane
+# ------------------------------------------------------------------------------------------------
+
+def _beam_disc(X, V0, dx, rho, lo, hi, fixed, clamp_x=None, method="csph", mat=None,
+               h_ratio=1.1):
+    """The recommended set-up: quadratic base, order-2 volumes, the clamp face X = clamp_x a
+    boundary (no pairs across it), its corners excluded from the integration, uniform weights.
+    X (N, 2) node lattice with the lattice volumes V0 (the kernel sums and the masses)."""
+    label = None if clamp_x is None else (X[:, 0] < clamp_x - 1e-9 * dx).astype(int)
+    if method == "csph":
+        disc = csph.discretise(X, V0, rho, dx, h_ratio, correction="quadratic", body=label)
+    else:
+        disc = hpm.wls_discretisation(hpm.build(X, V0, mat, dx, body=label))
+    ex = None
+    if clamp_x is not None:
+        ex = np.isclose(X[:, 0], clamp_x) & (np.isclose(X[:, 1], lo[1]) | np.isclose(X[:, 1], hi[1]))
+    V, nrm = cs.boundary_normals(X, dx, cs.box_inside(lo, hi, dx), order=2, exclude=ex)
+    new, info = cs.consistent_discretisation(disc, V, nrm, cs.column_mask(fixed), "quadratic")
+    return new
+
+
+def _lowest_period(disc, mat, fixed, shift=0.0):
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    body = csph.Body(disc, mat)
+    _, A = body.evaluate(disc.X.copy(), tangent=True)
+    K = body.tangent(A)
+    free = ~fixed.ravel()
+    M = sp.diags(np.repeat(disc.m, disc.dim)[free]).tocsc()
+    w2 = spla.eigsh(K[free][:, free].tocsc(), k=4 if shift else 1, M=M, sigma=shift,
+                    which="LM", return_eigenvectors=False)
+    w2 = np.sort(w2)
+    return 2 * np.pi / np.sqrt(w2[w2 > 1e-6 * w2.max()][0])
+
+
+def test_plate_period_h10_against_fem():
+    """The 004 plate at H/Δx = 10, rigid clamp at X = 0 (the FEM's clamp): the linearised period
+    within 0.1 % of the FEM modal period. The method's bulk error is O(Δx²) (+0.04 % at H/Δx = 10
+    on the free–free beam below); the clamped corners' singularity adds a term of about that size
+    (measured +0.025 % here, −0.010 % at 20, −0.007 % at 40). The uncorrected quadratic gradients
+    (−0.18 %) and the correction without the corner exclusion (−0.20 %) fail this gate."""
+    fem = pytest.importorskip("fem_reference")
+    from workbench.scenes import Plate
+
+    scene = Plate()
+    mat = scene.material
+    ps = lattice.plate(scene, 10, mode="node")
+    fixed = np.zeros((ps.n, 2), bool)
+    fixed[ps.sets["fixed"]] = True
+    lo, hi = (0.0, -scene.H / 2), (scene.L, scene.H / 2)
+    disc = _beam_disc(ps.X, ps.V, ps.dx, mat.rho, lo, hi, fixed, clamp_x=0.0)
+    T = _lowest_period(disc, mat, fixed)
+    err = T / fem.reference(scene, "period") - 1
+    assert abs(err) < 1e-3, err
+
+
+def test_free_free_beam_period_converges_at_second_order():
+    """Without a clamp (no singular corner) the lowest flexural period of a free–free plane-strain
+    beam converges at second order (measured 2.1 on 5, 10, 20 across H): observed order > 1.8 from
+    the successive differences (the first-order variants — the linear base, or trapezoid volumes —
+    reach 1.9 only from far larger errors, 1.4 % and 1 % at H/Δx = 10)."""
+    L, H = 0.2, 0.02
+    mat = Material.svk(E=1e5, nu=0.3, rho=1000.0)
+    T = []
+    for res in (5, 10, 20):
+        dx = H / res
+        X, V0 = lattice.grid((0.0, -H / 2), (L, H / 2), dx, "node")
+        fixed = np.zeros(X.shape, bool)
+        disc = _beam_disc(X, V0, dx, mat.rho, (0.0, -H / 2), (L, H / 2), fixed)
+        T.append(_lowest_period(disc, mat, fixed, shift=-1.0))
+    d1, d2 = T[1] - T[0], T[2] - T[1]
+    order = np.log2(abs(d1 / d2))
+    assert order > 1.8 and abs(d2 / T[2]) < 1e-3, (T, order)
+
+
+def test_symmetry_plane_half_model_matches_full_model():
+    """Clamped–clamped beam [0, 2L] (faces held) and its half [0, L] with a roller (u_X = 0) on the
+    symmetry plane, column mask 'dof': the first (symmetric) period agrees to 5e-6 at H/Δx = 10
+    (measured 4.7e-6; 4.7e-7 at 20: the two are different discretisations of the same problem,
+    one-sided stencils at the roller, and agree far below their own discretisation error, 1.3e-3).
+    Gate 2e-5; the mask 'particle' (2.6e-4) and the uncorrected gradients (9e-4) fail it."""
+    L, H, res = 0.2, 0.02, 10
+    mat = Material.svk(E=1e5, nu=0.3, rho=1000.0)
+    dx = H / res
+    T = {}
+    for half in (False, True):
+        Lx = L if half else 2 * L
+        X, V0 = lattice.grid((0.0, -H / 2), (Lx, H / 2), dx, "node")
+        fixed = np.zeros(X.shape, bool)
+        fixed[np.isclose(X[:, 0], 0.0)] = True
+        fixed[np.isclose(X[:, 0], Lx), 0] = True
+        if not half:
+            fixed[np.isclose(X[:, 0], Lx)] = True
+        disc = csph.discretise(X, V0, mat.rho, dx, 1.1, correction="quadratic")
+        V, nrm = cs.boundary_normals(X, dx, cs.box_inside((0, -H / 2), (Lx, H / 2), dx), order=2)
+        disc, _ = cs.consistent_discretisation(disc, V, nrm, cs.column_mask(fixed, "dof"))
+        T[half] = _lowest_period(disc, mat, fixed)
+    assert abs(T[True] / T[False] - 1) < 2e-5, T
+
+
+@pytest.mark.parametrize("method,law,gate", [("csph", "svk", 2e-3), ("csph", "neo_hooke", 2e-3),
+                                             ("hpm", "svk", 2e-3)])
+def test_cantilever_tip_h10_against_fem(method, law, gate):
+    """Static tip-loaded cantilever (004 E) at H/Δx = 10, all four loads (up to P L²/(E I) = 5),
+    through csph.solve_cantilever with the corrected gradients: within 0.2 % of the converged FEM
+    (measured csph +0.10 … +0.05 %, hpm with the quadratic basis +0.03 %; the uncorrected quadratic
+    CSPH is −0.23 … +0.35 %, HPM's own gradients +3.9 %)."""
+    fem = pytest.importorskip("fem_reference")
+    from workbench.scenes import Cantilever
+
+    scene = Cantilever(law=law)
+    mat = scene.material
+
+    def disc(ps):
+        fixed = np.zeros((ps.n, 2), bool)
+        fixed[ps.sets["fixed"]] = True
+        return _beam_disc(ps.X, ps.V, ps.dx, mat.rho, (0.0, -scene.H / 2),
+                          (scene.L, scene.H / 2), fixed, clamp_x=0.0, method=method, mat=mat)
+
+    r = csph.solve_cantilever(scene, 10, lattice_mode="node", discretisation=disc,
+                              solver_name=method)
+    err = r["tip_deflection"] / fem.reference(scene, "tip_deflection") - 1
+    assert np.abs(err).max() < gate, err
