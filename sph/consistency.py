@@ -25,9 +25,9 @@ F exact for affine (and, with the quadratic basis, quadratic) motions,
     Σ_c p(X_c − X_a) ⊗ G_ac = T          (row or reproducing constraints, per particle a)        (R)
 
 (p(Δ) = Δ, T = I for the linear basis; p = (Δ, Δ_i Δ_k), T = (I, 0) for the quadratic one). Since
-only G changes, F, the force −∂Π/∂x, the conservation of linear and angular momentum (Π is
-invariant under rigid motions for any G with Σ_b G_ab-difference form) and the symmetric tangent
-K = ∂²Π/∂x∂x of :func:`sph.csph.tangent_matrix` are kept unchanged.
+only G changes, F, the force −∂Π/∂x, the conservation of linear and angular momentum (F is a sum
+of differences x_b − x_a, so Π is invariant under rigid motions for any G) and the symmetric
+tangent K = ∂²Π/∂x∂x of :func:`sph.csph.tangent_matrix` are kept unchanged.
 
 The correction (:func:`consistent_gradients`) minimises Σ_p |δG_p|²/ω_p subject to (R) and (I).
 With multipliers Λ_a (m×d, rows) and μ_c (d, columns),
@@ -36,14 +36,14 @@ With multipliers Λ_a (m×d, rows) and μ_c (d, columns),
 
 and eliminating Λ_a with the moment matrix M_a = Σ_c ω_ac p_ac p_acᵀ (m×m):
 
-    δG_ac = ω_ac R_aᵀ M_a⁻¹ p_ac + V_a ω_ac [(I − Π_a) Δμ]_c,     Δμ_c = μ_c − μ_a,              (C2)
+    δG_ac = ω_ac R_aᵀ M_a⁻¹ p_ac + V_a ω_ac [(I − Π_a) Δμ]_c,   Δμ_c = μ_c − μ_a,            (C2)
 
 with R_a = T − Σ_c p_ac ⊗ G_ac the row residual of the base gradients and Π_a the ω-weighted
 least-squares projection onto the basis on a's stencil, (Π_a u)_c = p_acᵀ M_a⁻¹ Σ_e ω_ae p_ae u_e.
 Inserting (C2) into (I) gives, separately for each component j of μ, the sparse symmetric positive
 semi-definite system
 
-    K μ_j = r_j,   K = Σ_a V_a² B_aᵀ [W_a − W_a P_a M_a⁻¹ P_aᵀ W_a] B_a,                          (C3)
+    K μ_j = r_j,   K = Σ_a V_a² B_aᵀ [W_a − W_a P_a M_a⁻¹ P_aᵀ W_a] B_a,                    (C3)
                    r_c = n_c − Σ_a V_a g_ac(G + δG⁰),
 
 B_a the difference map μ ↦ (μ_c − μ_a)_c on a's stencil, W_a = diag(ω_ac), P_a the rows p_acᵀ.
@@ -75,8 +75,8 @@ lattice; numbers in the report of this change):
   nearest pairs and leave −0.14 % at H/Δx = 10.
 
 The multiplier system is factorised once (scipy's SuperLU in symmetric mode) and refined on the
-true residual of the corrected gradients; set-up ≈ 2× the cost of the neighbour search and
-gradients at 1e4 particles, ~20 s at 1e5 (2-D plate, 2 cores).
+true residual of the corrected gradients; set-up (2-D plate, 2 cores) 2 s at 2e4 particles and
+18 s at 1e5 with the quadratic basis (10 s linear), 8–30× :func:`sph.csph.discretise`.
 """
 from __future__ import annotations
 
@@ -582,7 +582,8 @@ def column_sums(V, indptr, indices, G) -> np.ndarray:
 
 def row_residual(X, indptr, indices, G, basis: str = "linear") -> np.ndarray:
     """max_a of |Σ_c p(X_c − X_a) ⊗ G_ac − T| (linear part dimensionless, quadratic part in m),
-    per particle (N,): the reproducing conditions (R) (F exact for affine, and quadratic, motions)."""
+    per particle (N,): the reproducing conditions (R) (F exact for affine, and quadratic,
+    motions)."""
     N, d = X.shape
     a = np.repeat(np.arange(N), np.diff(indptr))
     D = X[indices] - X[a]
@@ -627,15 +628,23 @@ def consistent_gradients(X, V, indptr, indices, G, normals, free, basis: str = "
     dropped (see :func:`column_mask`); weights (nnz,) ω_p > 0 or None (uniform; see
     :func:`pair_weights`); adjust_normals: move n on the boundary particles (‖n_c‖ > 0) by the least
     amount that makes eq. C3 solvable when (V, n) violate the discrete divergence theorem
-    (otherwise those columns keep a residual).
+    (otherwise those columns keep a residual; a traction must then be distributed by the adjusted
+    n, ``info["normals"]``, for the patch test to hold); refine: passes of iterative refinement on
+    the true column residual (the multipliers of C3 can be large and smooth and δG loses digits
+    to cancellation; each pass gains ~20×, the quadratic basis at 1e5 particles needs ~8).
+
+    The null space of C3 (polynomials of the basis vanishing on the dropped columns, per connected
+    body) is removed by fixing μ = 0 at as many well-spread particles (pivoted QR of the
+    polynomials' values), which changes no δG; one SuperLU factorisation (symmetric mode) serves
+    all components j with the same imposed set.
 
     Returns (G_new (nnz, d), info) with info: ``row_residual`` (max over a of |(R) − T|),
     ``column_residual`` (max over imposed (c, j) of |Σ_a V_a g_ac,j − n_c,j| / max|n|),
     ``base_column_residual`` (the same for G), ``normals`` (the n actually enforced),
     ``normals_adjustment`` (max |Δn| / max |n|), ``incompatibility`` (the same before adjusting),
     ``correction`` (max |δG| / max |G|), ``pinned`` (multipliers fixed to remove the null space),
-    ``singular_rows`` (rows whose moment matrix is singular: not corrected), ``time`` (s, by part)
-    and ``n_unknowns``."""
+    ``singular_rows`` (rows whose moment matrix is singular: not corrected), ``time`` (s, by part),
+    ``refinements``, ``residual_history`` and ``n_unknowns``."""
     if basis not in BASES:
         raise ValueError(f"basis: {basis!r} is not one of {BASES}")
     t0 = time.perf_counter()
@@ -796,7 +805,8 @@ def column_mask(fixed, mode: str = "dof") -> np.ndarray:
     symmetric state has no shear stress on the plane, and for a diagonal P (the uniaxial block).
     ``"particle"``: every column of a particle with any free DOF — exact for every uniform P
     (shear along a roller plane loaded by its traction included), at the cost of more
-    constraints."""
+    constraints. On a symmetry plane use ``"dof"``: the half model of a clamped–clamped beam
+    then matches the full model's first period to 5e-6 at H/Δx = 10 ("particle": 3e-4)."""
     fixed = np.asarray(fixed, dtype=bool)
     if mode == "dof":
         return ~fixed

@@ -403,7 +403,8 @@ def _beam_disc(X, V0, dx, rho, lo, hi, fixed, clamp_x=None, method="csph", mat=N
         disc = hpm.wls_discretisation(hpm.build(X, V0, mat, dx, body=label))
     ex = None
     if clamp_x is not None:
-        ex = np.isclose(X[:, 0], clamp_x) & (np.isclose(X[:, 1], lo[1]) | np.isclose(X[:, 1], hi[1]))
+        ex = np.isclose(X[:, 0], clamp_x) & (np.isclose(X[:, 1], lo[1])
+                                             | np.isclose(X[:, 1], hi[1]))
     V, nrm = cs.boundary_normals(X, dx, cs.box_inside(lo, hi, dx), order=2, exclude=ex)
     new, info = cs.consistent_discretisation(disc, V, nrm, cs.column_mask(fixed), "quadratic")
     return new
