@@ -98,12 +98,12 @@ def dynamic_relaxation(body: Body, x: np.ndarray, cons: Constraints, x_target_fi
     """Equilibrium by explicit dynamics (the fused loop of :func:`sph.total_lagrangian.advance`)
     with kinetic damping: the velocities are zeroed whenever the kinetic energy, sampled every
     ``check_every`` steps, has passed a peak. Converged when ‖f + f_ext‖ on the free DOFs ≤
-    tol · force_scale (default: ‖f_ext‖). Returns (x, converged, steps); the body's history is
-    committed along the way."""
+    tol · force_scale (default: the total applied load Σ|f_ext|). Returns (x, converged, steps);
+    the body's history is committed along the way."""
     disc = body.disc
     dt = cfl_time_step(spacing(body), body.table.wave_speed("strain"), dt_factor)
     if force_scale is None:
-        force_scale = max(float(np.linalg.norm(cons.f_ext)), 1e-300)
+        force_scale = max(float(np.abs(cons.f_ext).sum()), 1e-300)
     x = np.ascontiguousarray(x, dtype=np.float64).copy()
     x[cons.fixed] = x_target_fixed[cons.fixed]
     fixed = np.ascontiguousarray(cons.fixed, dtype=np.uint8)
