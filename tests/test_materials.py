@@ -396,3 +396,23 @@ def test_material_table_rows_match_each_material_alone():
         assert np.array_equal(r["stress"][n], alone["stress"])
         assert np.array_equal(r["A"][n], alone["A"])
     assert np.all(r["history"][mat_id != 1] == 0.0)  # elastic points keep their (unused) columns
+
+
+def test_parameter_layout():
+    """Slots of ``Material.params()`` (package docstring): the small-strain moduli from E and ν by
+    the textbook formulas, Swift constants, and the J2 kinds in slots 10 and 11."""
+    from workbench.materials import N_PARAMS
+
+    assert N_PARAMS == 12
+    E, nu = 202e9, 0.3
+    p = Material.j2(E=E, nu=nu, C=868.8e6, eps0=0.0013, n=0.179).params()
+    assert p.shape == (N_PARAMS,) and p[0] == 3
+    assert p[1] == pytest.approx(E * nu / ((1 + nu) * (1 - 2 * nu)), rel=TOL_ROUND)
+    assert p[2] == pytest.approx(E / (2 * (1 + nu)), rel=TOL_ROUND)
+    assert tuple(p[3:6]) == (868.8e6, 0.0013, 0.179) and p[6] == math.inf
+    assert p[10] == 0  # Swift hardening
+    for name, mat in ELASTIC.items():
+        assert mat.params().shape == (N_PARAMS,)
+    with pytest.raises(ValueError, match="prm"):  # a table of the wrong width is refused
+        kernels.material_points(np.eye(3)[None].copy(), np.zeros((1, 0)), SVK.params()[None, :10].copy(),
+                                np.zeros(1, np.int64))

@@ -18,7 +18,11 @@ slot  meaning
 7     c1, Pa                 (law 2)
 8     c2, Pa                 (law 2)
 9     tolerance of the local Newton on the plastic multiplier (relative)
+10    hardening kind of J2: 0 Swift (slots 3–5 as above), 1 linear
+11    failure mode of J2 once D ≥ 1: 0 literal (P = 0), 1 compression only
 ====  ==========================================================================
+
+Law code 4 is reserved for the mortar law (its own meanings of slots 1–9, same ``N_PARAMS``).
 
 History per point (``n_history`` columns): none for the elastic laws; for J2 eleven floats,
 ``[Cp⁻¹ (3×3, row-major), ε_p, D]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial left
@@ -35,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
-N_PARAMS = 10
+N_PARAMS = 12
 N_HISTORY_J2 = 11
 HIST_EPS_P = 9
 HIST_DAMAGE = 10
@@ -168,6 +172,8 @@ class Material:
         p[6] = self.eps_L
         p[7], p[8] = self.c1, self.c2
         p[9] = self.tol
+        p[10] = 0.0  # Swift hardening
+        p[11] = 0.0  # literal failure rule
         return p
 
     def initial_history(self, n_points: int) -> np.ndarray:

@@ -30,6 +30,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from . import N_PARAMS
+
 # JIT options in one place. error_model="numpy": divisions give inf/nan instead of raising, which
 # keeps the hot loops free of Python error checks.
 JIT = dict(cache=True, error_model="numpy")
@@ -542,6 +544,8 @@ def _check(F, h_old, prm, mat_id):
     """Shapes and codes of a batch: F (N, 3, 3), h_old (N, n_history), prm (n_mat, N_PARAMS),
     mat_id (N,) indices into prm; n_history must hold the widest law of the table (the elastic
     laws ignore and keep any history columns)."""
+    if prm.shape[1] != N_PARAMS:
+        raise ValueError("prm: a parameter table needs N_PARAMS columns (Material.params())")
     for r in range(prm.shape[0]):
         law = int(prm[r, 0])
         if law < 0 or law > 3:
