@@ -15,7 +15,8 @@ slot  meaning
 4     Swift ε0, -            (law 3)
 5     Swift n, -             (law 3)
 6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, stress zero once D ≥ 1
-7     c1, Pa                 (law 2)
+7     c1, Pa                 (law 2); initial yield stress σ_y(0), Pa (law 3: derived from the
+      hardening constants; a trial state with q ≤ σ_y(0) is elastic without evaluating σ_y(ε_p))
 8     c2, Pa                 (law 2)
 9     tolerance of the local Newton on the plastic multiplier (relative)
 10    hardening kind of J2: 0 Swift (slots 3–5 as above), 1 linear
@@ -171,6 +172,8 @@ class Material:
         p[3], p[4], p[5] = self.C, self.eps0, self.n
         p[6] = self.eps_L
         p[7], p[8] = self.c1, self.c2
+        if self.law == "j2":
+            p[7] = self.sigma_y0
         p[9] = self.tol
         p[10] = 0.0  # Swift hardening
         p[11] = 0.0  # literal failure rule
