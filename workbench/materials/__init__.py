@@ -8,12 +8,12 @@ vector ``prm`` that the numba point routines in :mod:`workbench.materials.kernel
 slot  meaning
 ====  ==========================================================================
 0     law code: 0 Saint Venant–Kirchhoff, 1 compressible neo-Hookean,
-      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky + Swift)
+      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky, Swift or linear hardening)
 1     Lamé λ, Pa (for law 2: the λ of eq. 12)
 2     shear modulus μ, Pa (law 2: unused, its small-strain value is c1 + c2)
-3     Swift C, Pa            (law 3)
-4     Swift ε0, -            (law 3)
-5     Swift n, -             (law 3)
+3     Swift C, Pa            (law 3, Swift);  linear: initial yield stress σ_y0, Pa
+4     Swift ε0, -            (law 3, Swift);  linear: hardening modulus H = dσ_y/dε_p, Pa
+5     Swift n, -             (law 3, Swift);  linear: 0
 6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, stress zero once D ≥ 1
 7     c1, Pa                 (law 2); initial yield stress σ_y(0), Pa (law 3: derived from the
       hardening constants; a trial state with q ≤ σ_y(0) is elastic without evaluating σ_y(ε_p))
@@ -30,6 +30,11 @@ History per point (``n_history`` columns): none for the elastic laws; for J2 ele
 Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed.
 
 Deformation gradients are always 3×3; plane strain is F33 = 1 with the 2×2 block taken from P.
+
+J2 hardening acts on the Kirchhoff yield stress as a function of the equivalent plastic strain:
+Swift σ_y = C (ε_p + ε0)^n (paper 000) or linear σ_y = σ_y0 + H ε_p (the bilinear steel of paper
+003, Fig. 14). A post-yield slope E_t of the uniaxial stress–strain curve is H = E E_t/(E − E_t)
+(:func:`linear_hardening_modulus`; the papers' E_t = E/100 is H = E/99).
 """
 from __future__ import annotations
 
@@ -40,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
+HARDENING_CODES = {"swift": 0, "linear": 1}
 N_PARAMS = 12
 N_HISTORY_J2 = 11
 HIST_EPS_P = 9
@@ -67,6 +73,9 @@ class Material:
     c2: float = 0.0
     lam_mr: float = 0.0
     tol: float = 1e-12
+    hardening: str = "swift"
+    sy0: float = 0.0  # linear hardening: initial yield stress, Pa
+    H: float = 0.0    # linear hardening: dσ_y/dε_p, Pa
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -101,6 +110,15 @@ class Material:
         return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L).validated()
 
     @classmethod
+    def j2_linear(cls, E: float, nu: float, sigma_y0: float, H: float, rho: float = 7850.0,
+                  eps_L: float = math.inf) -> "Material":
+        """Finite-strain J2 (as :meth:`j2`) with linear isotropic hardening on the Kirchhoff
+        stress, σ_y = σ_y0 + H ε_p. Under uniaxial stress the post-yield slope of τ against the
+        log strain is E_t = E H/(E + H); from a given E_t use :func:`linear_hardening_modulus`."""
+        return cls(law="j2", E=E, nu=nu, rho=rho, eps_L=eps_L, hardening="linear", sy0=sigma_y0,
+                   H=H).validated()
+
+    @classmethod
     def from_bulk_shear(cls, law: str, K: float, G: float, rho: float) -> "Material":
         E = 9 * K * G / (3 * K + G)
         nu = (3 * K - 2 * G) / (2 * (3 * K + G))
@@ -117,12 +135,23 @@ class Material:
         if not self.rho > 0:
             raise ValueError(f"rho: {self.rho} kg/m^3 is not allowed; density must be > 0")
         if self.law == "j2":
-            if not self.C > 0:
-                raise ValueError(f"C: {self.C} Pa is not allowed; Swift C must be > 0")
-            if not self.eps0 > 0:
-                raise ValueError(f"eps0: {self.eps0} is not allowed; Swift eps0 must be > 0")
-            if not (0 <= self.n < 1):
-                raise ValueError(f"n: {self.n} is not allowed; Swift exponent must lie in [0, 1)")
+            if self.hardening not in HARDENING_CODES:
+                raise ValueError(f"hardening: {self.hardening!r} is not one of "
+                                 f"{sorted(HARDENING_CODES)}")
+            if self.hardening == "swift":
+                if not self.C > 0:
+                    raise ValueError(f"C: {self.C} Pa is not allowed; Swift C must be > 0")
+                if not self.eps0 > 0:
+                    raise ValueError(f"eps0: {self.eps0} is not allowed; Swift eps0 must be > 0")
+                if not (0 <= self.n < 1):
+                    raise ValueError(f"n: {self.n} is not allowed; Swift exponent must lie in [0, 1)")
+            else:
+                if not (self.sy0 > 0 and math.isfinite(self.sy0)):
+                    raise ValueError(f"sigma_y0: {self.sy0} Pa is not allowed; the initial yield "
+                                     "stress must be > 0 and finite")
+                if not (self.H >= 0 and math.isfinite(self.H)):
+                    raise ValueError(f"H: {self.H} Pa is not allowed; the hardening modulus must "
+                                     "be >= 0 and finite")
             if not self.eps_L > 0:
                 raise ValueError(f"eps_L: {self.eps_L} is not allowed; strain limit must be > 0")
         if self.law == "mooney_rivlin" and not (self.c1 >= 0 and self.c2 >= 0 and self.c1 + self.c2 > 0):
@@ -150,8 +179,17 @@ class Material:
 
     @property
     def sigma_y0(self) -> float:
-        """Initial yield stress C ε0^n, Pa (J2 only)."""
+        """Initial yield stress, Pa (J2 only): C ε0^n (Swift) or σ_y0 (linear)."""
+        if self.hardening == "linear":
+            return self.sy0
         return self.C * self.eps0 ** self.n
+
+    def yield_stress(self, eps_p):
+        """Kirchhoff yield stress σ_y(ε_p), Pa (J2 only; numpy, for references and plots)."""
+        eps_p = np.asarray(eps_p, dtype=float)
+        if self.hardening == "linear":
+            return self.sy0 + self.H * eps_p
+        return self.C * (eps_p + self.eps0) ** self.n
 
     def wave_speed(self, plane: str | None = "strain") -> float:
         """Fastest small-strain elastic wave speed, m/s (P wave; in plane stress the plate wave)."""
@@ -172,10 +210,12 @@ class Material:
         p[3], p[4], p[5] = self.C, self.eps0, self.n
         p[6] = self.eps_L
         p[7], p[8] = self.c1, self.c2
+        p[9] = self.tol
         if self.law == "j2":
             p[7] = self.sigma_y0
-        p[9] = self.tol
-        p[10] = 0.0  # Swift hardening
+            p[10] = HARDENING_CODES[self.hardening]
+            if self.hardening == "linear":
+                p[3], p[4], p[5] = self.sy0, self.H, 0.0
         p[11] = 0.0  # literal failure rule
         return p
 
@@ -189,9 +229,12 @@ class Material:
     def describe(self) -> dict:
         """Attributes for a dataset (law and its constants)."""
         d = {"material_law": self.law, "E": self.E, "nu": self.nu, "rho": self.rho}
-        if self.law == "j2":
-            d.update(swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n, eps_L=self.eps_L,
+        if self.law == "j2" and self.hardening == "linear":
+            d.update(hardening="linear", sigma_y0=self.sy0, H=self.H, eps_L=self.eps_L,
                      hardening_on="Kirchhoff stress")
+        elif self.law == "j2":
+            d.update(hardening="swift", swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n,
+                     eps_L=self.eps_L, hardening_on="Kirchhoff stress")
         if self.law == "mooney_rivlin":
             d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
         return d
@@ -264,11 +307,26 @@ class MaterialTable:
         return all(m.law == "svk" for m in self.materials)
 
 
+def linear_hardening_modulus(E: float, E_t: float) -> float:
+    """Hardening modulus H = dσ_y/dε_p, Pa, of linear J2 hardening whose uniaxial stress–strain
+    curve has the post-yield slope E_t (0 ≤ E_t < E): from dε = dτ/E + dτ/H, E_t = E H/(E + H),
+    so H = E E_t/(E − E_t). Paper 003's "E/100" (Fig. 14) is E_t = E/100, i.e. H = E/99."""
+    if not E > 0:
+        raise ValueError(f"E: {E} Pa is not allowed; E must be > 0")
+    if not (0 <= E_t < E):
+        raise ValueError(f"E_t: {E_t} Pa is not allowed; the post-yield slope must lie in [0, E)")
+    return E * E_t / (E - E_t)
+
+
 # Materials of the papers (scenes.md).
 TABLE1_STEEL = Material.j2(E=202e9, nu=0.3, C=868.8e6, eps0=0.0013, n=0.179, rho=7974.0)
 RUBBER = Material.from_bulk_shear("svk", K=3.25e6, G=7.15e5, rho=1000.0)
 RING_RUBBER = Material.mooney_rivlin(c1=1.265e5, c2=1.012e4, lam=1.012e7, rho=125.4)
 BEAM = Material.svk(E=1.0e5, nu=0.3, rho=1000.0)
+# Rebar of paper 003 (Table 1, Fig. 14): E = 206 GPa, ν = 0.3, yield 394 MPa, post-yield slope
+# E/100 of the stress–strain curve. The paper gives no density: 7850 kg/m³ (structural steel).
+REBAR_003 = Material.j2_linear(E=206e9, nu=0.3, sigma_y0=394e6,
+                               H=linear_hardening_modulus(206e9, 206e9 / 100), rho=7850.0)
 
 
 def evaluate(material, F: np.ndarray, history: np.ndarray | None = None,

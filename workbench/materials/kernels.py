@@ -11,8 +11,8 @@ Laws (dispatch on ``int(prm[0])``; parameter and history layouts in the package 
    Linearised: μ = c1 + c2, K = 2λ.
 3. Finite-strain J2 plasticity: multiplicative split, Hencky elasticity τ = λ tr(ε_e) I + 2μ ε_e,
    ε_e = ½ ln b_e, exponential-map return mapping in principal Kirchhoff space (Simo 1992;
-   de Souza Neto, Perić & Owen 2008, ch. 14), Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff
-   stress, damage D = ε_p/ε_L with zero stress once D ≥ 1 (paper 000 eq. 36), and the consistent
+   de Souza Neto, Perić & Owen 2008, ch. 14), Swift hardening σ_y = C (ε_p + ε0)^n or linear
+   hardening σ_y = σ_y0 + H ε_p on the Kirchhoff stress, damage D = ε_p/ε_L with zero stress once D ≥ 1 (paper 000 eq. 36), and the consistent
    algorithmic tangent (isotropic tensor function derivative, de Souza Neto Box A.6). The
    eigen-decomposition of the trial b_e is the closed form :func:`eigh3` (no iteration).
 
@@ -397,9 +397,17 @@ def mooney_rivlin_point(F, prm, P, A, want_tangent):
 # finite-strain J2
 # --------------------------------------------------------------------------------------------
 @njit(**JIT)
+def linear_hardening(sy0, H, eps_p):
+    """Linear hardening σ_y = σ_y0 + H ε_p, its slope H and curvature 0."""
+    return sy0 + H * eps_p, H, 0.0
+
+
+@njit(**JIT)
 def yield_stress(prm, eps_p):
-    """Kirchhoff yield stress σ_y(ε_p) of a J2 parameter row, its slope H and curvature H'
-    (:func:`swift`)."""
+    """Kirchhoff yield stress σ_y(ε_p) of a J2 parameter row, its slope H and curvature H':
+    :func:`swift` (prm[10] = 0) or :func:`linear_hardening` (prm[10] = 1)."""
+    if prm[10] == 1.0:
+        return linear_hardening(prm[3], prm[4], eps_p)
     return swift(prm[3], prm[4], prm[5], eps_p)
 
 
@@ -741,8 +749,13 @@ def _check(F, h_old, prm, mat_id):
         law = int(prm[r, 0])
         if law < 0 or law > 3:
             raise ValueError("prm[:, 0]: unknown material law code")
-        if law == 3 and h_old.shape[1] < 11:
-            raise ValueError("h_old: J2 needs 11 history columns")
+        if law == 3:
+            if h_old.shape[1] < 11:
+                raise ValueError("h_old: J2 needs 11 history columns")
+            if prm[r, 10] != 0.0 and prm[r, 10] != 1.0:
+                raise ValueError("prm[:, 10]: J2 hardening kind must be 0 (Swift) or 1 (linear)")
+            if prm[r, 11] != 0.0 and prm[r, 11] != 1.0:
+                raise ValueError("prm[:, 11]: J2 failure mode must be 0 (literal) or 1 (compression)")
     if F.shape[1] != 3 or F.shape[2] != 3 or h_old.shape[0] != F.shape[0]:
         raise ValueError("F must be (N, 3, 3) and h_old (N, n_history)")
     if mat_id.shape[0] != F.shape[0]:
