@@ -310,7 +310,7 @@ def test_exact_uniaxial_curve():
 
 def test_damage_zeroes_stress_once_eps_p_reaches_eps_L():
     epsL = 0.05
-    dam = J2.replace(eps_L=epsL)
+    dam = J2.replace(eps_L=epsL, failure="literal")  # the rule as printed (more in test_materials_j2)
     Fs = [uniaxial_F(J2, e) for e in np.linspace(0.01, 0.15, 15)]
     Pd, hd = drive(dam, Fs)
     Pu, hu = drive(J2, Fs)

@@ -87,3 +87,89 @@ def test_linear_tangent_is_finite_difference_of_P(label, F, h):
     assert rel(A, Afd) < TOL_FD, rel(A, Afd)
     _, hn, _ = stress(LIN, F, h)
     assert hn[0, HIST_EPS_P] > h[HIST_EPS_P]  # a plastic step
+
+
+# --- failure rules (paper 000 eq. 36) ----------------------------------------------------------
+from test_materials import J2, uniaxial_reference  # noqa: E402  (Table 1 steel, Swift)
+
+EPS_L = 0.05
+
+
+def uniaxial_signed(mat, eps):
+    """The exact uniaxial solution at log strain eps of either sign (the problem is odd in ε):
+    τ11, ε_p, lateral log strain."""
+    tau, ep, lat = uniaxial_reference(mat, abs(eps))
+    s = 1.0 if eps >= 0 else -1.0
+    return s * tau, ep, s * lat
+
+
+def signed_F(mat, eps):
+    _, _, lat = uniaxial_signed(mat, eps)
+    return np.diag([math.exp(eps), math.exp(lat), math.exp(lat)])
+
+
+def failure_path(sign):
+    """Uniaxial loading (sign +1 tension, −1 compression) in steps of 0.01 to 0.12 (failure at
+    ε_p = 0.05 on the way), then the axial strain driven back through 0 to the opposite sign with
+    the lateral stretch frozen at its last value."""
+    strains = sign * np.linspace(0.01, 0.12, 12)
+    Fs = [signed_F(J2, e) for e in strains]
+    lat = Fs[-1][1, 1]
+    back = sign * np.linspace(0.1, -0.1, 11)
+    Fs += [np.diag([math.exp(e), lat, lat]) for e in back]
+    return Fs
+
+
+@pytest.mark.parametrize("sign", [1, -1], ids=["tension", "compression"])
+@pytest.mark.parametrize("rule", ["literal", "compression"])
+def test_failure_rule_on_a_uniaxial_path(rule, sign):
+    """Before failure the exact uniaxial curve; from the step in which ε_p reaches ε_L on: P = 0
+    (literal), or τ = K ln J I where J < 1 and 0 elsewhere (compression); history frozen."""
+    mat = J2.replace(eps_L=EPS_L, failure=rule)
+    Fs = failure_path(sign)
+    Ps, hs = drive(mat, Fs)
+    n_failed = n_pressure = 0
+    for k, (F, P, h) in enumerate(zip(Fs, Ps, hs[1:])):
+        J = np.linalg.det(F)
+        if h[HIST_EPS_P] < EPS_L:
+            tau_ref, ep_ref, _ = uniaxial_signed(J2, math.log(F[0, 0]))
+            assert kirchhoff(P, F)[0, 0] == pytest.approx(tau_ref, rel=TOL_UNIAXIAL)
+            continue
+        n_failed += 1
+        assert h[HIST_EPS_P] / EPS_L == pytest.approx(h[10], rel=TOL_ROUND) and h[10] >= 1
+        if k > 0 and hs[k][10] >= 1:
+            assert np.array_equal(h, hs[k])  # frozen once failed
+        A = tangent(mat, F, h)
+        if rule == "compression" and J < 1:
+            n_pressure += 1
+            tau_ref = mat.K * math.log(J) * np.eye(3)  # closed form of the compression rule
+            assert rel(kirchhoff(P, F), tau_ref) < TOL_ROUND
+            assert rel(A, fd_tangent(mat, F, h, 1e-6)) < TOL_FD
+        else:
+            assert np.all(P == 0.0) and np.all(A == 0.0)
+    assert 10 <= n_failed <= len(Fs) - 4  # failure mid-path (ε_p = 0.05 near ε = 0.052)
+    if rule == "compression":
+        assert n_pressure >= 5  # the path reaches J < 1 after failure, in both directions
+    else:
+        assert n_pressure == 0
+
+
+def test_compression_rule_tangent_is_finite_difference_of_P():
+    mat = J2.replace(eps_L=EPS_L, failure="compression")
+    h = mat.initial_history(1)[0]
+    h[HIST_EPS_P], h[10] = 0.07, 0.07 / EPS_L  # a failed point
+    F = 0.97 * (random_rotation(41) @ (np.eye(3) + 0.05 * np.random.default_rng(42).standard_normal((3, 3))))
+    assert np.linalg.det(F) < 1
+    A = tangent(mat, F, h)
+    assert rel(A, fd_tangent(mat, F, h, 1e-6)) < TOL_FD
+    P, hn, _ = stress(mat, F, h)
+    J = np.linalg.det(F)
+    assert rel(P[0], mat.K * math.log(J) * np.linalg.inv(F).T) < TOL_ROUND
+    assert np.array_equal(hn[0], h)
+
+
+def test_failure_mode_is_validated():
+    with pytest.raises(ValueError, match="failure"):
+        J2.replace(failure="brittle")
+    assert J2.failure == "compression" and J2.params()[11] == 1.0  # the default
+    assert J2.replace(failure="literal").params()[11] == 0.0

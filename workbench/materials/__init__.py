@@ -14,13 +14,14 @@ slot  meaning
 3     Swift C, Pa            (law 3, Swift);  linear: initial yield stress σ_y0, Pa
 4     Swift ε0, -            (law 3, Swift);  linear: hardening modulus H = dσ_y/dε_p, Pa
 5     Swift n, -             (law 3, Swift);  linear: 0
-6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, stress zero once D ≥ 1
+6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, failed once D ≥ 1
 7     c1, Pa                 (law 2); initial yield stress σ_y(0), Pa (law 3: derived from the
       hardening constants; a trial state with q ≤ σ_y(0) is elastic without evaluating σ_y(ε_p))
 8     c2, Pa                 (law 2)
 9     tolerance of the local Newton on the plastic multiplier (relative)
 10    hardening kind of J2: 0 Swift (slots 3–5 as above), 1 linear
-11    failure mode of J2 once D ≥ 1: 0 literal (P = 0), 1 compression only
+11    failure mode of J2 once D ≥ 1: 0 literal (P = 0), 1 compression only (τ = K ln J I if
+      J < 1, else 0); see :meth:`Material.j2`
 ====  ==========================================================================
 
 Law code 4 is reserved for the mortar law (its own meanings of slots 1–9, same ``N_PARAMS``).
@@ -46,6 +47,7 @@ import numpy as np
 
 LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
 HARDENING_CODES = {"swift": 0, "linear": 1}
+FAILURE_CODES = {"literal": 0, "compression": 1}
 N_PARAMS = 12
 N_HISTORY_J2 = 11
 HIST_EPS_P = 9
@@ -76,6 +78,7 @@ class Material:
     hardening: str = "swift"
     sy0: float = 0.0  # linear hardening: initial yield stress, Pa
     H: float = 0.0    # linear hardening: dσ_y/dε_p, Pa
+    failure: str = "compression"
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -104,19 +107,26 @@ class Material:
 
     @classmethod
     def j2(cls, E: float, nu: float, C: float, eps0: float, n: float, rho: float = 7974.0,
-           eps_L: float = math.inf) -> "Material":
+           eps_L: float = math.inf, failure: str = "compression") -> "Material":
         """Finite-strain J2: multiplicative split, Hencky elasticity, exponential-map return
-        mapping, Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff stress."""
-        return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L).validated()
+        mapping, Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff stress.
+
+        eps_L: limit plastic strain ε_L of the damage D = ε_p/ε_L (paper 000 eq. 36; ``inf``: no
+        failure). failure: what a point keeps once D ≥ 1 — ``"literal"``: nothing (P = 0, the
+        paper as printed, "stress zero once D ≥ 1"); ``"compression"`` (default): only a
+        compressive volumetric response τ = K ln J I for J < 1 (no tension, no shear; failed
+        points still do not interpenetrate)."""
+        return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L,
+                   failure=failure).validated()
 
     @classmethod
     def j2_linear(cls, E: float, nu: float, sigma_y0: float, H: float, rho: float = 7850.0,
-                  eps_L: float = math.inf) -> "Material":
+                  eps_L: float = math.inf, failure: str = "compression") -> "Material":
         """Finite-strain J2 (as :meth:`j2`) with linear isotropic hardening on the Kirchhoff
         stress, σ_y = σ_y0 + H ε_p. Under uniaxial stress the post-yield slope of τ against the
         log strain is E_t = E H/(E + H); from a given E_t use :func:`linear_hardening_modulus`."""
         return cls(law="j2", E=E, nu=nu, rho=rho, eps_L=eps_L, hardening="linear", sy0=sigma_y0,
-                   H=H).validated()
+                   H=H, failure=failure).validated()
 
     @classmethod
     def from_bulk_shear(cls, law: str, K: float, G: float, rho: float) -> "Material":
@@ -152,6 +162,8 @@ class Material:
                 if not (self.H >= 0 and math.isfinite(self.H)):
                     raise ValueError(f"H: {self.H} Pa is not allowed; the hardening modulus must "
                                      "be >= 0 and finite")
+            if self.failure not in FAILURE_CODES:
+                raise ValueError(f"failure: {self.failure!r} is not one of {sorted(FAILURE_CODES)}")
             if not self.eps_L > 0:
                 raise ValueError(f"eps_L: {self.eps_L} is not allowed; strain limit must be > 0")
         if self.law == "mooney_rivlin" and not (self.c1 >= 0 and self.c2 >= 0 and self.c1 + self.c2 > 0):
@@ -216,7 +228,7 @@ class Material:
             p[10] = HARDENING_CODES[self.hardening]
             if self.hardening == "linear":
                 p[3], p[4], p[5] = self.sy0, self.H, 0.0
-        p[11] = 0.0  # literal failure rule
+            p[11] = FAILURE_CODES[self.failure]
         return p
 
     def initial_history(self, n_points: int) -> np.ndarray:
@@ -230,11 +242,11 @@ class Material:
         """Attributes for a dataset (law and its constants)."""
         d = {"material_law": self.law, "E": self.E, "nu": self.nu, "rho": self.rho}
         if self.law == "j2" and self.hardening == "linear":
-            d.update(hardening="linear", sigma_y0=self.sy0, H=self.H, eps_L=self.eps_L,
-                     hardening_on="Kirchhoff stress")
+            d.update(hardening="linear", sigma_y0=self.sy0, H=self.H)
         elif self.law == "j2":
-            d.update(hardening="swift", swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n,
-                     eps_L=self.eps_L, hardening_on="Kirchhoff stress")
+            d.update(hardening="swift", swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n)
+        if self.law == "j2":
+            d.update(eps_L=self.eps_L, failure=self.failure, hardening_on="Kirchhoff stress")
         if self.law == "mooney_rivlin":
             d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
         return d

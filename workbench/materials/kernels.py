@@ -12,7 +12,8 @@ Laws (dispatch on ``int(prm[0])``; parameter and history layouts in the package 
 3. Finite-strain J2 plasticity: multiplicative split, Hencky elasticity τ = λ tr(ε_e) I + 2μ ε_e,
    ε_e = ½ ln b_e, exponential-map return mapping in principal Kirchhoff space (Simo 1992;
    de Souza Neto, Perić & Owen 2008, ch. 14), Swift hardening σ_y = C (ε_p + ε0)^n or linear
-   hardening σ_y = σ_y0 + H ε_p on the Kirchhoff stress, damage D = ε_p/ε_L with zero stress once D ≥ 1 (paper 000 eq. 36), and the consistent
+   hardening σ_y = σ_y0 + H ε_p on the Kirchhoff stress, damage D = ε_p/ε_L (paper 000 eq. 36)
+   with the failed point's stress by :func:`failed_stress` once D ≥ 1, and the consistent
    algorithmic tangent (isotropic tensor function derivative, de Souza Neto Box A.6). The
    eigen-decomposition of the trial b_e is the closed form :func:`eigh3` (no iteration).
 
@@ -572,6 +573,36 @@ def j2_tangent(A, P, Finv, n, u, x, tA, D):
 
 
 @njit(**JIT)
+def failed_stress(cof, J, K, mode, P, A, want_tangent):
+    """Stress of a failed J2 point, D = ε_p/ε_L ≥ 1 (paper 000 eq. 36, "stress zero once
+    D ≥ 1"), by the failure mode prm[11]:
+
+    * 0 literal: P = 0 and A = 0, as printed;
+    * 1 compression: only a compressive volumetric response is left, τ = K ln J I for J < 1 and
+      0 otherwise (no tension, no shear, but no interpenetration either): P = K ln J F⁻ᵀ,
+      A_ijkl = K F⁻ᵀ_ij F⁻ᵀ_kl − K ln J F⁻ᵀ_il F⁻ᵀ_kj (ψ = ½ K (ln J)², :func:`failed_energy`).
+
+    cof, J: cofactor J F⁻ᵀ (row-major 9-tuple) and J = det F; K: bulk modulus, Pa."""
+    if mode == 1.0 and J < 1.0:
+        lnJ = math.log(J)
+        iJ = 1.0 / J
+        c = K * lnJ * iJ
+        for i in range(3):
+            for j in range(3):
+                P[i, j] = c * cof[3 * i + j]
+        if want_tangent:
+            a = K * iJ * iJ
+            b = -K * lnJ * iJ * iJ
+            for i in range(3):
+                for j in range(3):
+                    for k in range(3):
+                        for l in range(3):
+                            A[i, j, k, l] = a * cof[3 * i + j] * cof[3 * k + l] + b * cof[3 * i + l] * cof[3 * k + j]
+    else:
+        _zero(P, A, want_tangent)
+
+
+@njit(**JIT)
 def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     """Finite-strain J2, exponential-map return mapping (de Souza Neto et al. Box 14.3) with the
     consistent tangent dP/dF (P = τ F⁻ᵀ; dτ from the isotropic function τ(be_tr), Box A.6).
@@ -592,8 +623,8 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         _fail(P, A, want_tangent)
         _copy(h_old, h_new)
         return INVERTED
-    if h_old[HIST_DAMAGE] >= 1.0:  # failed earlier (000 eq. 36): no stress, history frozen
-        _zero(P, A, want_tangent)
+    if h_old[HIST_DAMAGE] >= 1.0:  # failed earlier (000 eq. 36): history frozen
+        failed_stress(cof, J, K, prm[11], P, A, want_tangent)
         _copy(h_old, h_new)
         return OK
 
@@ -686,8 +717,8 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         h_new[HIST_DAMAGE] = eps_p / epsL  # ε_L = inf gives D = 0
         for m in range(HIST_DAMAGE + 1, h_old.shape[0]):
             h_new[m] = h_old[m]
-        if h_new[HIST_DAMAGE] >= 1.0:
-            _zero(P, A, want_tangent)
+        if h_new[HIST_DAMAGE] >= 1.0:  # fails in this step
+            failed_stress(cof, J, K, prm[11], P, A, want_tangent)
             return status
     else:
         _copy(h_old, h_new)
