@@ -26,9 +26,12 @@ slot  meaning
 
 Law code 4 is reserved for the mortar law (its own meanings of slots 1–9, same ``N_PARAMS``).
 
-History per point (``n_history`` columns): none for the elastic laws; for J2 eleven floats,
-``[Cp⁻¹ (3×3, row-major), ε_p, D]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial left
-Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed.
+History per point (``n_history`` columns): none for the elastic laws; for J2 thirteen floats,
+``[Cp⁻¹ (3×3, row-major), ε_p, D, W_p, W_rel]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial
+left Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed; D = ε_p/ε_L;
+W_p the plastic work ∫₀^{ε_p} σ_y dε_p and W_rel the stored energy released when the point failed,
+both per unit reference volume, J/m³ (:func:`energies`). Along any path the work done on a point
+is ∫ P : dF = ψ + W_p + W_rel, ψ the stored energy (:func:`energies`).
 
 Deformation gradients are always 3×3; plane strain is F33 = 1 with the 2×2 block taken from P.
 
@@ -49,9 +52,11 @@ LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3}
 HARDENING_CODES = {"swift": 0, "linear": 1}
 FAILURE_CODES = {"literal": 0, "compression": 1}
 N_PARAMS = 12
-N_HISTORY_J2 = 11
+N_HISTORY_J2 = 13
 HIST_EPS_P = 9
 HIST_DAMAGE = 10
+HIST_W_P = 11
+HIST_W_REL = 12
 
 
 @dataclass(frozen=True)
@@ -383,4 +388,38 @@ def evaluate(material, F: np.ndarray, history: np.ndarray | None = None,
         res["A"] = A
     if single:
         res = {k: (v[0] if v is not None else None) for k, v in res.items()}
+    return res
+
+
+def energies(material, F: np.ndarray, history: np.ndarray | None = None, mat_id=None) -> dict:
+    """Energies per unit reference volume, J/m³, of many points, for energy balances: the work
+    done on a point along its path is ∫ P : dF = psi + W_p + W_rel.
+
+    material: a :class:`Material` or :class:`MaterialTable` (``mat_id`` as in :func:`evaluate`).
+    F: (N, 3, 3) or (3, 3); history: (N, n_history) of the end of the step (None: virgin).
+    Returns ``psi`` the stored energy (:func:`kernels.stored_energy_point`), ``W_p`` the plastic
+    work and ``W_rel`` the energy released at failure (J2 history columns; 0 for other laws),
+    each (N,) (scalars for one F). Multiply by the reference volumes and sum for a body.
+    """
+    from . import kernels
+
+    table = MaterialTable.of(material)
+    F = np.asarray(F, dtype=np.float64)
+    single = F.ndim == 2
+    F = np.ascontiguousarray(F.reshape(-1, 3, 3))
+    mat_id = (np.zeros(F.shape[0], np.int64) if mat_id is None
+              else np.ascontiguousarray(np.broadcast_to(mat_id, F.shape[:1]), dtype=np.int64))
+    if history is None:
+        history = table.initial_history(mat_id)
+    history = np.ascontiguousarray(np.asarray(history, dtype=np.float64).reshape(F.shape[0], -1))
+    if history.shape[1] != table.n_history:
+        raise ValueError(f"history: expected {table.n_history} columns, got {history.shape[1]}")
+    psi = kernels.stored_energies(F, history, table.params(), mat_id)
+    j2 = np.array([m.law == "j2" for m in table.materials])[mat_id]
+    W_p = np.where(j2, history[:, HIST_W_P], 0.0) if history.shape[1] > HIST_W_P else np.zeros_like(psi)
+    W_rel = (np.where(j2, history[:, HIST_W_REL], 0.0) if history.shape[1] > HIST_W_REL
+             else np.zeros_like(psi))
+    res = {"psi": psi, "W_p": W_p, "W_rel": W_rel}
+    if single:
+        res = {k: float(v[0]) for k, v in res.items()}
     return res

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from . import HIST_DAMAGE, HIST_EPS_P, N_PARAMS
+from . import HIST_DAMAGE, HIST_EPS_P, HIST_W_P, HIST_W_REL, N_HISTORY_J2, N_PARAMS
 
 # JIT options in one place. error_model="numpy": divisions give inf/nan instead of raising, which
 # keeps the hot loops free of Python error checks.
@@ -413,6 +413,25 @@ def yield_stress(prm, eps_p):
 
 
 @njit(**JIT)
+def plastic_work(prm, eps_p, sy):
+    """Plastic work per unit reference volume, J/m³, at equivalent plastic strain ε_p:
+    W_p = ∫₀^{ε_p} σ_y(e) de, in closed form — Swift: [(ε_p + ε0) σ_y(ε_p) − ε0 σ_y(0)]/(n + 1),
+    linear: σ_y0 ε_p + ½ H ε_p². sy: σ_y(ε_p) (the return mapping has it).
+
+    Why this is the plastic work: the plastic power is τ : d_p = Δγ̇ τ : N = σ_y(ε_p) ε̇_p
+    (associative J2, N = (3/2) s/q, and q = σ_y while ε_p grows), so W_p is a function of ε_p
+    alone and each step's increment is integrated exactly, with no step-size error and no
+    accumulated round-off. (The backward-Euler product σ_y(ε_p,n+1) Δε_p — the τ_{n+1} : Δε_p of
+    the return mapping's discrete energy identity — is not exact: it exceeds the increment by
+    ½ H Δε_p² + O(Δε_p³), first order in the step. Along a radial path the trapezoid-integrated
+    work ½(τ_n + τ_{n+1}) : Δε equals Δψ_e + ½(σ_y,n + σ_y,n+1) Δε_p exactly, i.e. the
+    trapezoid rule on σ_y, which differs from this increment by (1/12)|σ_y''| Δε_p³.)"""
+    if prm[10] == 1.0:
+        return eps_p * (prm[3] + 0.5 * prm[4] * eps_p)
+    return ((eps_p + prm[4]) * sy - prm[4] * prm[7]) / (prm[5] + 1.0)
+
+
+@njit(**JIT)
 def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, tol):
     """Plastic multiplier of the radial return in principal Kirchhoff space (de Souza Neto et al.
     2008, Box 14.3): the root Δγ of r(Δγ) = q_tr − 3μΔγ − σ_y(ε_p,n + Δγ).
@@ -603,11 +622,23 @@ def failed_stress(cof, J, K, mode, P, A, want_tangent):
 
 
 @njit(**JIT)
+def failed_energy(J, K, mode):
+    """Stored energy per unit reference volume, J/m³, of a failed point (:func:`failed_stress`):
+    ψ = ½ K (ln J)² for J < 1 under the compression mode, 0 otherwise."""
+    if mode == 1.0 and J < 1.0:
+        lnJ = math.log(J)
+        return 0.5 * K * lnJ * lnJ
+    return 0.0
+
+
+@njit(**JIT)
 def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     """Finite-strain J2, exponential-map return mapping (de Souza Neto et al. Box 14.3) with the
     consistent tangent dP/dF (P = τ F⁻ᵀ; dτ from the isotropic function τ(be_tr), Box A.6).
 
-    h_old, h_new: (n_history ≥ 11,) = [Cp⁻¹ row-major, ε_p, D, ...]. Allocation-free: the
+    h_old, h_new: (n_history ≥ 13,) = [Cp⁻¹ row-major, ε_p, D, W_p, W_rel, ...] (W_p:
+    :func:`plastic_work`; W_rel: the stored energy ψ_e − ψ_failed released in the step in which
+    the point fails, J/m³; further columns, of wider laws of a table, carried). Allocation-free: the
     eigen-decomposition of be_tr is the closed form :func:`eigh3`; an elastic step (trial state
     inside the yield surface) skips the return mapping and the exponential map; the tangent is
     formed only with ``want_tangent``.
@@ -715,9 +746,13 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         eps_p = eps_p_n + dg
         h_new[HIST_EPS_P] = eps_p
         h_new[HIST_DAMAGE] = eps_p / epsL  # ε_L = inf gives D = 0
-        for m in range(HIST_DAMAGE + 1, h_old.shape[0]):
+        h_new[HIST_W_P] = plastic_work(prm, eps_p, sy)
+        h_new[HIST_W_REL] = h_old[HIST_W_REL]
+        for m in range(N_HISTORY_J2, h_old.shape[0]):  # columns of wider laws: carried
             h_new[m] = h_old[m]
-        if h_new[HIST_DAMAGE] >= 1.0:  # fails in this step
+        if h_new[HIST_DAMAGE] >= 1.0:  # fails in this step: its stored energy is released
+            psi_e = fac * fac * (s0 * s0 + s1 * s1 + s2 * s2) / (4.0 * mu) + 0.5 * K * tre * tre
+            h_new[HIST_W_REL] += psi_e - failed_energy(J, K, prm[11])
             failed_stress(cof, J, K, prm[11], P, A, want_tangent)
             return status
     else:
@@ -736,6 +771,92 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         j2_tangent(A, P, Finv, ((n0x, n0y, n0z), (n1x, n1y, n1z), (n2x, n2y, n2z)),
                    ((u0x, u0y, u0z), (u1x, u1y, u1z), (u2x, u2y, u2z)), (x0, x1, x2), (t0, t1, t2), D)
     return status
+
+
+# --------------------------------------------------------------------------------------------
+# stored energies
+# --------------------------------------------------------------------------------------------
+@njit(**JIT)
+def stored_energy_point(F, h, prm):
+    """Stored (elastic) energy per unit reference volume ψ(F, h), J/m³, of one point, in closed
+    form; P = ∂ψ/∂F at fixed history (for J2: within an elastic step).
+
+    0 SVK: ψ = ½λ (tr E)² + μ E : E.
+    1 neo-Hooke: ψ = ½μ (I1 − 3) − μ ln J + ½λ (ln J)².
+    2 Mooney–Rivlin-like (004 eq. 12): ψ = ½c1 I1 + ½c2 I2 − [3/2 c1 I3^{1/3} + 3/2 c2 I3^{2/3}
+      − λ/4 (ln I3)²], I3 = J².
+    3 J2 (Hencky): ψ = μ |dev ε_e|² + ½K (tr ε_e)², ε_e = ½ ln b_e, b_e = F Cp⁻¹ Fᵀ with the
+      history h of the end of the step; a failed point (D ≥ 1): :func:`failed_energy`.
+
+    F: (3, 3); h: (n_history,) history (read by J2 only); prm: (N_PARAMS,) row. NaN for J ≤ 0 or
+    an unknown law code."""
+    law = int(prm[0])
+    cof, J = _cofactor(F)
+    if not J > 0.0:
+        return np.nan
+    lam = prm[1]
+    mu = prm[2]
+    if law == 3:
+        K = lam + 2.0 * mu / 3.0
+        if h[HIST_DAMAGE] >= 1.0:
+            return failed_energy(J, K, prm[11])
+        b00, b01, b02, b11, b12, b22 = _be_trial(F, h)
+        e = eigh3(b00, b01, b02, b11, b12, b22)
+        if not (e[0] > 0.0 and e[1] > 0.0 and e[2] > 0.0):
+            return np.nan
+        e0 = 0.5 * math.log(e[0])
+        e1 = 0.5 * math.log(e[1])
+        e2 = 0.5 * math.log(e[2])
+        tr = e0 + e1 + e2
+        d0 = e0 - tr / 3.0
+        d1 = e1 - tr / 3.0
+        d2 = e2 - tr / 3.0
+        return mu * (d0 * d0 + d1 * d1 + d2 * d2) + 0.5 * K * tr * tr
+    # C = FᵀF
+    c00 = F[0, 0] * F[0, 0] + F[1, 0] * F[1, 0] + F[2, 0] * F[2, 0]
+    c11 = F[0, 1] * F[0, 1] + F[1, 1] * F[1, 1] + F[2, 1] * F[2, 1]
+    c22 = F[0, 2] * F[0, 2] + F[1, 2] * F[1, 2] + F[2, 2] * F[2, 2]
+    c01 = F[0, 0] * F[0, 1] + F[1, 0] * F[1, 1] + F[2, 0] * F[2, 1]
+    c02 = F[0, 0] * F[0, 2] + F[1, 0] * F[1, 2] + F[2, 0] * F[2, 2]
+    c12 = F[0, 1] * F[0, 2] + F[1, 1] * F[1, 2] + F[2, 1] * F[2, 2]
+    I1 = c00 + c11 + c22
+    lnJ = math.log(J)
+    if law == 0:
+        E00 = 0.5 * (c00 - 1.0)
+        E11 = 0.5 * (c11 - 1.0)
+        E22 = 0.5 * (c22 - 1.0)
+        trE = E00 + E11 + E22
+        EE = (E00 * E00 + E11 * E11 + E22 * E22
+              + 0.5 * (c01 * c01 + c02 * c02 + c12 * c12))  # 2 (½ c_ij)² per off-diagonal pair
+        return 0.5 * lam * trE * trE + mu * EE
+    if law == 1:
+        return 0.5 * mu * (I1 - 3.0) - mu * lnJ + 0.5 * lam * lnJ * lnJ
+    if law == 2:
+        c1 = prm[7]
+        c2 = prm[8]
+        trCC = c00 * c00 + c11 * c11 + c22 * c22 + 2.0 * (c01 * c01 + c02 * c02 + c12 * c12)
+        I2 = 0.5 * (I1 * I1 - trCC)
+        J23 = math.exp(2.0 / 3.0 * lnJ)
+        return (0.5 * c1 * I1 + 0.5 * c2 * I2 - 1.5 * c1 * J23 - 1.5 * c2 * J23 * J23
+                + lam * lnJ * lnJ)  # λ/4 (ln I3)² = λ (ln J)²
+    return np.nan
+
+
+@njit(**JIT_PARALLEL)
+def _energies_into(F, h, prm, mat_id, out):
+    for n in prange(F.shape[0]):
+        out[n] = stored_energy_point(F[n], h[n], prm[mat_id[n]])
+
+
+@njit(**JIT)
+def stored_energies(F, h, prm, mat_id):
+    """Stored energy per unit reference volume of N points, J/m³, in parallel: F (N, 3, 3),
+    h (N, n_history) (of the end of the step), prm (n_mat, N_PARAMS), mat_id (N,) → ψ (N,).
+    With the J2 history columns W_p and W_rel, ψ + W_p + W_rel is the work done on each point."""
+    _check(F, h, prm, mat_id)
+    out = np.empty(F.shape[0])
+    _energies_into(F, h, prm, mat_id, out)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -781,8 +902,8 @@ def _check(F, h_old, prm, mat_id):
         if law < 0 or law > 3:
             raise ValueError("prm[:, 0]: unknown material law code")
         if law == 3:
-            if h_old.shape[1] < 11:
-                raise ValueError("h_old: J2 needs 11 history columns")
+            if h_old.shape[1] < N_HISTORY_J2:
+                raise ValueError("h_old: J2 needs N_HISTORY_J2 = 13 history columns")
             if prm[r, 10] != 0.0 and prm[r, 10] != 1.0:
                 raise ValueError("prm[:, 10]: J2 hardening kind must be 0 (Swift) or 1 (linear)")
             if prm[r, 11] != 0.0 and prm[r, 11] != 1.0:
