@@ -173,3 +173,58 @@ def test_failure_mode_is_validated():
         J2.replace(failure="brittle")
     assert J2.failure == "compression" and J2.params()[11] == 1.0  # the default
     assert J2.replace(failure="literal").params()[11] == 0.0
+
+
+# --- tables and wider history rows -------------------------------------------------------------
+def test_wider_history_columns_are_carried_on_every_j2_path():
+    """A J2 point in a table whose widest law has more history columns keeps the extra columns
+    on every path: elastic, plastic, failing in this step, failed earlier, inverted F."""
+    from workbench.materials import N_HISTORY_J2, kernels
+
+    mat = J2.replace(eps_L=EPS_L, failure="compression")
+    extra = np.array([3.5, -7.25, 1e300])
+    h0 = np.concatenate([mat.initial_history(1)[0], extra])
+    failed = h0.copy()
+    failed[HIST_EPS_P], failed[10] = 0.06, 1.2
+    near = h0.copy()
+    _, hs = drive(mat, [signed_F(J2, e) for e in (0.01, 0.02, 0.03, 0.04, 0.049)])
+    near[:N_HISTORY_J2] = hs[-1]
+    cases = {"elastic": (np.eye(3) + 1e-4 * np.diag([1.0, -0.3, -0.3]), h0),
+             "plastic": (signed_F(J2, 0.02), h0),
+             "failing": (signed_F(J2, 0.06), near),
+             "failed": (0.98 * np.eye(3), failed),
+             "inverted": (np.diag([1.0, 1.0, -0.5]), h0)}
+    F = np.stack([c[0] for c in cases.values()])
+    h = np.stack([c[1] for c in cases.values()])
+    prm = mat.params()[None]
+    for fn in (kernels.material_points, kernels.material_points_tangent):
+        out = fn(np.ascontiguousarray(F), h.copy(), prm, np.zeros(len(F), np.int64))
+        hn = out[-2]
+        assert np.array_equal(hn[:, N_HISTORY_J2:], h[:, N_HISTORY_J2:])
+    P, hn, st = kernels.material_points(np.ascontiguousarray(F), h.copy(), prm, np.zeros(len(F), np.int64))
+    assert list(st) == [0, 0, 0, 0, kernels.INVERTED]
+    assert hn[1, HIST_EPS_P] > 0 and hn[2, 10] >= 1 and hn[2, 12] > 0  # plastic; failed, W_rel > 0
+
+
+def test_table_of_j2_variants_matches_each_material_alone():
+    """Swift (literal failure), linear (compression failure) and an elastic law in one table:
+    every point gets exactly its own material's stress, tangent and history."""
+    from workbench.materials import MaterialTable, evaluate
+
+    from test_materials import SVK
+
+    table = MaterialTable((J2.replace(eps_L=EPS_L, failure="literal"),
+                           LIN.replace(eps_L=0.01, failure="compression"), SVK))
+    mat_id = np.array([0, 1, 2, 0, 1, 1])
+    F = np.stack([signed_F(J2, 0.03), linear_uniaxial_F(LIN, 0.02), np.eye(3) + 0.01 * np.ones((3, 3)),
+                  signed_F(J2, -0.08), linear_uniaxial_F(LIN, -0.03), 0.97 * np.eye(3)])
+    h = table.initial_history(mat_id)
+    r1 = evaluate(table, F, h, mat_id=mat_id)  # first step from virgin: some fail at once
+    r = evaluate(table, 0.999 * F, r1["history"], tangent=True, mat_id=mat_id)
+    for k in range(len(F)):
+        m = table[mat_id[k]]
+        a1 = evaluate(m, F[k], h[k, : m.n_history] if m.n_history else None)
+        a = evaluate(m, 0.999 * F[k], a1["history"], tangent=True)
+        assert np.array_equal(r["stress"][k], a["stress"]) and np.array_equal(r["A"][k], a["A"])
+        assert np.array_equal(r["history"][k, : m.n_history], a["history"])
+    assert np.sum(r["history"][:, 10] >= 1) >= 2  # failed points of both rules are in the table
