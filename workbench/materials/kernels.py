@@ -14,8 +14,10 @@ Laws (dispatch on ``int(prm[0])``; parameter and history layouts in the package 
    de Souza Neto, Perić & Owen 2008, ch. 14), Swift hardening σ_y = C (ε_p + ε0)^n or linear
    hardening σ_y = σ_y0 + H ε_p on the Kirchhoff stress, damage D = ε_p/ε_L (paper 000 eq. 36)
    with the failed point's stress by :func:`failed_stress` once D ≥ 1, and the consistent
-   algorithmic tangent (isotropic tensor function derivative, de Souza Neto Box A.6). The
-   eigen-decomposition of the trial b_e is the closed form :func:`eigh3` (no iteration).
+   algorithmic tangent (isotropic tensor function derivative, de Souza Neto Box A.6). The stress
+   path works with matrix functions, ε = ½ ln b_e and the exponential map, evaluated by series
+   near I (:func:`log_spd`, :func:`exp_sym`: the elastic strains of metals) and spectrally
+   beyond; the tangent uses the closed-form eigen-decomposition :func:`eigh3` (no iteration).
 
 Entry points: :func:`material_point` (one point, allocation-free for every law, inlined into its
 numba callers — callable from other numba code inside its own ``prange``),
@@ -215,18 +217,18 @@ def eigh3(a00, a01, a02, a11, a12, a22):
     m11 = wx * bwx + wy * bwy + wz * bwz
     mean = 0.5 * (m00 + m11)
     hd = 0.5 * (m00 - m11)
-    rad = math.sqrt(hd * hd + m01 * m01)
+    rad = math.hypot(hd, m01)  # no underflow when the pair is (nearly) repeated
     # eigenvector (c, sn) of mean + rad: (hd + rad, m01) or (m01, rad − hd), whichever has no
-    # cancellation
-    kh = hd >= 0.0
-    c = hd + rad if kh else m01
-    sn = m01 if kh else rad - hd
-    nn = c * c + sn * sn
-    if nn > 0.0:
-        inv = 1.0 / math.sqrt(nn)
+    # cancellation, divided by rad first (so that its squares cannot underflow)
+    if rad > 0.0:
+        ir = 1.0 / rad
+        kh = hd >= 0.0
+        c = hd * ir + 1.0 if kh else m01 * ir
+        sn = m01 * ir if kh else 1.0 - hd * ir
+        inv = 1.0 / math.sqrt(c * c + sn * sn)
         c *= inv
         sn *= inv
-    else:  # rad = 0: a repeated pair, any basis of the plane
+    else:  # a repeated pair: any basis of the plane
         c = 1.0
         sn = 0.0
     return (q + beta * d, q + beta * (mean + rad), q + beta * (mean - rad),
@@ -247,14 +249,119 @@ def eig_sym3_closed(a, V):
     return 0
 
 
+# --------------------------------------------------------------------------------------------
+# functions of symmetric 3×3 matrices (6-tuples: upper triangle a00, a01, a02, a11, a12, a22)
+# --------------------------------------------------------------------------------------------
+# ‖Y‖_F bound of the series of ln (at most 12 terms) and ‖D‖_F bound of the series of exp (at
+# most 13 terms); beyond them the spectral form through eigh3 is cheaper.
+LOG_SERIES_MAX = 0.2
+EXP_SERIES_MAX = 0.25
+SERIES_TOL = 2.0 ** -56  # relative truncation error of both series (an eighth of eps)
+
+
 @njit(**JIT)
-def swift(C, eps0, n, eps_p):
-    """Swift hardening σ_y = C (ε_p + ε0)^n (paper 000, Table 1), its slope H = dσ_y/dε_p and
-    curvature H' = d²σ_y/dε_p² = (n − 1) H / (ε_p + ε0) (≤ 0, |H'| decreasing in ε_p)."""
-    base = eps_p + eps0
-    sy = C * base ** n
-    H = n * sy / base
-    return sy, H, (n - 1.0) * H / base
+def _sym_mul(a, b):
+    """Upper triangle of a b for symmetric a, b that commute (then a b is symmetric)."""
+    return (a[0] * b[0] + a[1] * b[1] + a[2] * b[2],
+            a[0] * b[1] + a[1] * b[3] + a[2] * b[4],
+            a[0] * b[2] + a[1] * b[4] + a[2] * b[5],
+            a[1] * b[1] + a[3] * b[3] + a[4] * b[4],
+            a[1] * b[2] + a[3] * b[4] + a[4] * b[5],
+            a[2] * b[2] + a[4] * b[4] + a[5] * b[5])
+
+
+@njit(**JIT)
+def _sym_norm2(a):
+    """‖a‖_F² of a symmetric 6-tuple."""
+    return (a[0] * a[0] + a[3] * a[3] + a[5] * a[5]
+            + 2.0 * (a[1] * a[1] + a[2] * a[2] + a[4] * a[4]))
+
+
+@njit(**JIT)
+def _sym_spectral(x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z):
+    """Σ x_A n_A ⊗ n_A as a symmetric 6-tuple."""
+    return (x0 * n0x * n0x + x1 * n1x * n1x + x2 * n2x * n2x,
+            x0 * n0x * n0y + x1 * n1x * n1y + x2 * n2x * n2y,
+            x0 * n0x * n0z + x1 * n1x * n1z + x2 * n2x * n2z,
+            x0 * n0y * n0y + x1 * n1y * n1y + x2 * n2y * n2y,
+            x0 * n0y * n0z + x1 * n1y * n1z + x2 * n2y * n2z,
+            x0 * n0z * n0z + x1 * n1z * n1z + x2 * n2z * n2z)
+
+
+@njit(**JIT)
+def log_spd(b):
+    """Matrix logarithm of a symmetric positive definite 3×3 b (6-tuple) → (ln b as a 6-tuple,
+    ok). ok is False when b is not positive definite (or not finite).
+
+    Near I, the series ln b = 2 atanh Y = 2 Σ_k Y^{2k+1}/(2k+1) with Y = (b − I)(b + I)⁻¹, whose
+    eigenvalues are tanh(½ ln x_A): no eigen-decomposition, no special case for repeated
+    eigenvalues. With z = ‖Y‖_F² the terms after the K-th sum to at most
+    2‖Y‖ z^K/((2K + 1)(1 − z)); K is the first with z^K/((2K + 1)(1 − z)) ≤ 2⁻⁵⁶, Horner in
+    Y² from the last term. Used while ‖Y‖_F ≤ LOG_SERIES_MAX (K ≤ 12: the elastic strains of
+    metals, |ε_e| ≲ 0.2); beyond, the spectral form Σ ln x_A n_A ⊗ n_A (:func:`eigh3`)."""
+    b00, b01, b02, b11, b12, b22 = b
+    a00 = b00 + 1.0
+    a11 = b11 + 1.0
+    a22 = b22 + 1.0
+    # cofactor (symmetric) and determinant of b + I
+    c00 = a11 * a22 - b12 * b12
+    c01 = b02 * b12 - b01 * a22
+    c02 = b01 * b12 - a11 * b02
+    c11 = a00 * a22 - b02 * b02
+    c12 = b01 * b02 - a00 * b12
+    c22 = a00 * a11 - b01 * b01
+    det = a00 * c00 + b01 * c01 + b02 * c02
+    Y = _sym_mul((b00 - 1.0, b01, b02, b11 - 1.0, b12, b22 - 1.0), (c00, c01, c02, c11, c12, c22))
+    idet = 1.0 / det
+    Y = (Y[0] * idet, Y[1] * idet, Y[2] * idet, Y[3] * idet, Y[4] * idet, Y[5] * idet)
+    Z = _sym_mul(Y, Y)
+    z = Z[0] + Z[3] + Z[5]  # ‖Y‖_F²
+    if z <= LOG_SERIES_MAX * LOG_SERIES_MAX:
+        K = 1
+        t = z
+        lim = SERIES_TOL * (1.0 - z)
+        while t > lim * (2 * K + 1):
+            t *= z
+            K += 1
+        c = 1.0 / (2 * K - 1)
+        S = (c, 0.0, 0.0, c, 0.0, c)
+        for k in range(K - 2, -1, -1):
+            S = _sym_mul(Z, S)
+            c = 1.0 / (2 * k + 1)
+            S = (S[0] + c, S[1], S[2], S[3] + c, S[4], S[5] + c)
+        L = _sym_mul(Y, S)
+        return (2.0 * L[0], 2.0 * L[1], 2.0 * L[2], 2.0 * L[3], 2.0 * L[4], 2.0 * L[5]), True
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(b00, b01, b02, b11, b12, b22)
+    if not (x0 > 0.0 and x1 > 0.0 and x2 > 0.0):
+        return (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan), False
+    return _sym_spectral(math.log(x0), math.log(x1), math.log(x2),
+                         n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z), True
+
+
+@njit(**JIT)
+def exp_sym(D):
+    """Matrix exponential of a symmetric 3×3 D (6-tuple) → 6-tuple.
+
+    The Taylor series Σ D^k/k! (Horner, terms while ‖D‖^k/k! > 2⁻⁵⁶) while ‖D‖_F ≤
+    EXP_SERIES_MAX (at most 13 terms: the return mapping's elastic deviator of metals); beyond,
+    the spectral form Σ exp(d_A) n_A ⊗ n_A (:func:`eigh3`)."""
+    d = math.sqrt(_sym_norm2(D))
+    if d <= EXP_SERIES_MAX:
+        K = 0
+        t = 1.0
+        while t > SERIES_TOL:
+            K += 1
+            t *= d / K
+        c = 1.0 / K
+        E = (1.0 + c * D[0], c * D[1], c * D[2], 1.0 + c * D[3], c * D[4], 1.0 + c * D[5])
+        for k in range(K - 1, 0, -1):
+            E = _sym_mul(D, E)
+            c = 1.0 / k
+            E = (1.0 + c * E[0], c * E[1], c * E[2], 1.0 + c * E[3], c * E[4], 1.0 + c * E[5])
+        return E
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(D[0], D[1], D[2], D[3], D[4], D[5])
+    return _sym_spectral(math.exp(x0), math.exp(x1), math.exp(x2),
+                         n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z)
 
 
 # --------------------------------------------------------------------------------------------
@@ -398,6 +505,16 @@ def mooney_rivlin_point(F, prm, P, A, want_tangent):
 # finite-strain J2
 # --------------------------------------------------------------------------------------------
 @njit(**JIT)
+def swift(C, eps0, n, eps_p):
+    """Swift hardening σ_y = C (ε_p + ε0)^n (paper 000, Table 1), its slope H = dσ_y/dε_p and
+    curvature H' = d²σ_y/dε_p² = (n − 1) H / (ε_p + ε0) (≤ 0, |H'| decreasing in ε_p)."""
+    base = eps_p + eps0
+    sy = C * base ** n
+    H = n * sy / base
+    return sy, H, (n - 1.0) * H / base
+
+
+@njit(**JIT)
 def linear_hardening(sy0, H, eps_p):
     """Linear hardening σ_y = σ_y0 + H ε_p, its slope H and curvature 0."""
     return sy0 + H * eps_p, H, 0.0
@@ -502,32 +619,6 @@ def _be_trial(F, h):
 
 
 @njit(**JIT)
-def _dyad(a, b):
-    """a ⊗ b of two 3-tuples as a row-major 9-tuple."""
-    return (a[0] * b[0], a[0] * b[1], a[0] * b[2],
-            a[1] * b[0], a[1] * b[1], a[1] * b[2],
-            a[2] * b[0], a[2] * b[1], a[2] * b[2])
-
-
-@njit(**JIT)
-def _comb(a, X, b, Y, c, Z):
-    """a X + b Y + c Z of three 9-tuples."""
-    return (a * X[0] + b * Y[0] + c * Z[0], a * X[1] + b * Y[1] + c * Z[1],
-            a * X[2] + b * Y[2] + c * Z[2], a * X[3] + b * Y[3] + c * Z[3],
-            a * X[4] + b * Y[4] + c * Z[4], a * X[5] + b * Y[5] + c * Z[5],
-            a * X[6] + b * Y[6] + c * Z[6], a * X[7] + b * Y[7] + c * Z[7],
-            a * X[8] + b * Y[8] + c * Z[8])
-
-
-@njit(**JIT)
-def _comb2(a, X, b, Y):
-    """a X + b Y of two 9-tuples."""
-    return (a * X[0] + b * Y[0], a * X[1] + b * Y[1], a * X[2] + b * Y[2],
-            a * X[3] + b * Y[3], a * X[4] + b * Y[4], a * X[5] + b * Y[5],
-            a * X[6] + b * Y[6], a * X[7] + b * Y[7], a * X[8] + b * Y[8])
-
-
-@njit(**JIT)
 def _theta(xa, xb, ta, tb, Daa, Dab, Dbb, Dba):
     """Off-diagonal modulus of the isotropic function τ(be): θ_ab = (τ_a − τ_b)/(x_a − x_b), or,
     when x_a and x_b coincide to EIG_GAP, its limit ∂τ_a/∂x_a − ∂τ_a/∂x_b symmetrised over a, b
@@ -550,45 +641,35 @@ def j2_tangent(A, P, Finv, n, u, x, tA, D):
           − P_il F⁻¹_jk,
 
     D_AB = ∂τ_A/∂ε_tr,B (principal algorithmic moduli, ε_tr,B = ½ ln x_B) and θ_AB from
-    :func:`_theta`.
+    :func:`_theta`. Evaluated as A_ijkl = Σ_C c_C(i, j, k) u_C,l − F⁻¹_jk P_il, the three
+    coefficients c_C formed once per (i, j, k).
 
     A (3, 3, 3, 3) output; P (3, 3); Finv: F⁻¹ row-major 9-tuple; n, u: 3-tuples of 3-tuples;
     x, tA: eigenvalues of be_tr and principal Kirchhoff stresses; D: 3-tuple of 3-tuples."""
-    G0 = _dyad(n[0], u[0])
-    G1 = _dyad(n[1], u[1])
-    G2 = _dyad(n[2], u[2])
-    S0 = _comb(D[0][0], G0, D[1][0], G1, D[2][0], G2)
-    S1 = _comb(D[0][1], G0, D[1][1], G1, D[2][1], G2)
-    S2 = _comb(D[0][2], G0, D[1][2], G1, D[2][2], G2)
     th01 = _theta(x[0], x[1], tA[0], tA[1], D[0][0], D[0][1], D[1][1], D[1][0])
     th02 = _theta(x[0], x[2], tA[0], tA[2], D[0][0], D[0][2], D[2][2], D[2][0])
     th12 = _theta(x[1], x[2], tA[1], tA[2], D[1][1], D[1][2], D[2][2], D[2][1])
-    N01 = _dyad(n[0], u[1])
-    N10 = _dyad(n[1], u[0])
-    N02 = _dyad(n[0], u[2])
-    N20 = _dyad(n[2], u[0])
-    N12 = _dyad(n[1], u[2])
-    N21 = _dyad(n[2], u[1])
-    Q01 = _comb2(th01, N01, th01, N10)
-    Q02 = _comb2(th02, N02, th02, N20)
-    Q12 = _comb2(th12, N12, th12, N21)
-    R01 = _comb2(x[1], N01, x[0], N10)
-    R02 = _comb2(x[2], N02, x[0], N20)
-    R12 = _comb2(x[2], N12, x[1], N21)
-    for ij in range(9):
-        i = ij // 3
-        j = ij - 3 * i
-        s0 = S0[ij]
-        s1 = S1[ij]
-        s2 = S2[ij]
-        q01 = Q01[ij]
-        q02 = Q02[ij]
-        q12 = Q12[ij]
-        for kl in range(9):
-            k = kl // 3
-            l = kl - 3 * k
-            A[i, j, k, l] = (s0 * G0[kl] + s1 * G1[kl] + s2 * G2[kl] + q01 * R01[kl]
-                             + q02 * R02[kl] + q12 * R12[kl] - P[i, l] * Finv[3 * j + k])
+    n0, n1, n2 = n
+    u0, u1, u2 = u
+    x0, x1, x2 = x
+    for i in range(3):
+        for j in range(3):
+            g0 = n0[i] * u0[j]
+            g1 = n1[i] * u1[j]
+            g2 = n2[i] * u2[j]
+            s0 = D[0][0] * g0 + D[1][0] * g1 + D[2][0] * g2
+            s1 = D[0][1] * g0 + D[1][1] * g1 + D[2][1] * g2
+            s2 = D[0][2] * g0 + D[1][2] * g1 + D[2][2] * g2
+            q01 = th01 * (n0[i] * u1[j] + n1[i] * u0[j])
+            q02 = th02 * (n0[i] * u2[j] + n2[i] * u0[j])
+            q12 = th12 * (n1[i] * u2[j] + n2[i] * u1[j])
+            for k in range(3):
+                c0 = s0 * n0[k] + x0 * (q01 * n1[k] + q02 * n2[k])
+                c1 = s1 * n1[k] + x1 * (q01 * n0[k] + q12 * n2[k])
+                c2 = s2 * n2[k] + x2 * (q02 * n0[k] + q12 * n1[k])
+                f = Finv[3 * j + k]
+                for l in range(3):
+                    A[i, j, k, l] = c0 * u0[l] + c1 * u1[l] + c2 * u2[l] - f * P[i, l]
 
 
 @njit(**JIT)
@@ -636,12 +717,15 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     """Finite-strain J2, exponential-map return mapping (de Souza Neto et al. Box 14.3) with the
     consistent tangent dP/dF (P = τ F⁻ᵀ; dτ from the isotropic function τ(be_tr), Box A.6).
 
+    Written with matrix functions: ε_tr = ½ ln be_tr (:func:`log_spd`), the radial return scales
+    its deviator by fac = 1 − 3μΔγ/q_tr, and the exponential map is be = exp(tr ε_tr·⅔) ·
+    exp(fac dev ln be_tr) (:func:`exp_sym`), Cp⁻¹ = F⁻¹ be F⁻ᵀ. An elastic step (trial state
+    inside the yield surface) skips the return mapping and the exponential map. The tangent alone
+    needs the eigen-decomposition of be_tr (:func:`eigh3`), formed only with ``want_tangent``.
+
     h_old, h_new: (n_history ≥ 13,) = [Cp⁻¹ row-major, ε_p, D, W_p, W_rel, ...] (W_p:
     :func:`plastic_work`; W_rel: the stored energy ψ_e − ψ_failed released in the step in which
-    the point fails, J/m³; further columns, of wider laws of a table, carried). Allocation-free: the
-    eigen-decomposition of be_tr is the closed form :func:`eigh3`; an elastic step (trial state
-    inside the yield surface) skips the return mapping and the exponential map; the tangent is
-    formed only with ``want_tangent``.
+    the point fails, J/m³; further columns, of wider laws of a table, carried). Allocation-free.
     """
     lam = prm[1]
     mu = prm[2]
@@ -659,27 +743,25 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         _copy(h_old, h_new)
         return OK
 
+    be = _be_trial(F, h_old)
+    L, ok = log_spd(be)  # 2 ε_tr
+    if not ok:
+        _fail(P, A, want_tangent)
+        _copy(h_old, h_new)
+        return INVERTED
     iJ = 1.0 / J
     Finv = (cof[0] * iJ, cof[3] * iJ, cof[6] * iJ,
             cof[1] * iJ, cof[4] * iJ, cof[7] * iJ,
             cof[2] * iJ, cof[5] * iJ, cof[8] * iJ)
-    b00, b01, b02, b11, b12, b22 = _be_trial(F, h_old)
-    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(b00, b01, b02, b11, b12, b22)
-    if not (x0 > 0.0 and x1 > 0.0 and x2 > 0.0):
-        _fail(P, A, want_tangent)
-        _copy(h_old, h_new)
-        return INVERTED
 
-    # trial principal log strains and Kirchhoff stresses (Hencky)
-    e0 = 0.5 * math.log(x0)
-    e1 = 0.5 * math.log(x1)
-    e2 = 0.5 * math.log(x2)
-    tre = e0 + e1 + e2
+    # trial Hencky stress: τ = K tr ε I + 2μ dev ε, ε = ½ L; q = √(3/2) |dev τ|
+    trL = L[0] + L[3] + L[5]
+    m3 = trL / 3.0
+    dL = (L[0] - m3, L[1], L[2], L[3] - m3, L[4], L[5] - m3)
+    tre = 0.5 * trL
     p = K * tre
-    s0 = 2.0 * mu * (e0 - tre / 3.0)
-    s1 = 2.0 * mu * (e1 - tre / 3.0)
-    s2 = 2.0 * mu * (e2 - tre / 3.0)
-    q_tr = math.sqrt(1.5 * (s0 * s0 + s1 * s1 + s2 * s2))
+    dn2 = _sym_norm2(dL)
+    q_tr = mu * math.sqrt(1.5 * dn2)
 
     eps_p_n = h_old[HIST_EPS_P]
     status = OK
@@ -695,54 +777,52 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     if plastic:
         dg, sy, H, status = j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, tol)
         fac = 1.0 - 3.0 * mu * dg / q_tr
-    t0 = p + fac * s0
-    t1 = p + fac * s1
-    t2 = p + fac * s2
-    # u_A = F⁻¹ n_A;  P = τ F⁻ᵀ = Σ τ_A n_A ⊗ u_A
-    u0x = Finv[0] * n0x + Finv[1] * n0y + Finv[2] * n0z
-    u0y = Finv[3] * n0x + Finv[4] * n0y + Finv[5] * n0z
-    u0z = Finv[6] * n0x + Finv[7] * n0y + Finv[8] * n0z
-    u1x = Finv[0] * n1x + Finv[1] * n1y + Finv[2] * n1z
-    u1y = Finv[3] * n1x + Finv[4] * n1y + Finv[5] * n1z
-    u1z = Finv[6] * n1x + Finv[7] * n1y + Finv[8] * n1z
-    u2x = Finv[0] * n2x + Finv[1] * n2y + Finv[2] * n2z
-    u2y = Finv[3] * n2x + Finv[4] * n2y + Finv[5] * n2z
-    u2z = Finv[6] * n2x + Finv[7] * n2y + Finv[8] * n2z
-    a0x = t0 * n0x; a0y = t0 * n0y; a0z = t0 * n0z
-    a1x = t1 * n1x; a1y = t1 * n1y; a1z = t1 * n1z
-    a2x = t2 * n2x; a2y = t2 * n2y; a2z = t2 * n2z
-    P[0, 0] = a0x * u0x + a1x * u1x + a2x * u2x
-    P[0, 1] = a0x * u0y + a1x * u1y + a2x * u2y
-    P[0, 2] = a0x * u0z + a1x * u1z + a2x * u2z
-    P[1, 0] = a0y * u0x + a1y * u1x + a2y * u2x
-    P[1, 1] = a0y * u0y + a1y * u1y + a2y * u2y
-    P[1, 2] = a0y * u0z + a1y * u1z + a2y * u2z
-    P[2, 0] = a0z * u0x + a1z * u1x + a2z * u2x
-    P[2, 1] = a0z * u0y + a1z * u1y + a2z * u2y
-    P[2, 2] = a0z * u0z + a1z * u1z + a2z * u2z
+    c = mu * fac
+    t00 = p + c * dL[0]
+    t01 = c * dL[1]
+    t02 = c * dL[2]
+    t11 = p + c * dL[3]
+    t12 = c * dL[4]
+    t22 = p + c * dL[5]
+    # P = τ F⁻ᵀ
+    P[0, 0] = t00 * Finv[0] + t01 * Finv[1] + t02 * Finv[2]
+    P[0, 1] = t00 * Finv[3] + t01 * Finv[4] + t02 * Finv[5]
+    P[0, 2] = t00 * Finv[6] + t01 * Finv[7] + t02 * Finv[8]
+    P[1, 0] = t01 * Finv[0] + t11 * Finv[1] + t12 * Finv[2]
+    P[1, 1] = t01 * Finv[3] + t11 * Finv[4] + t12 * Finv[5]
+    P[1, 2] = t01 * Finv[6] + t11 * Finv[7] + t12 * Finv[8]
+    P[2, 0] = t02 * Finv[0] + t12 * Finv[1] + t22 * Finv[2]
+    P[2, 1] = t02 * Finv[3] + t12 * Finv[4] + t22 * Finv[5]
+    P[2, 2] = t02 * Finv[6] + t12 * Finv[7] + t22 * Finv[8]
 
     if plastic:
-        # exponential map: be = Σ exp(2 ε_e,A) n_A ⊗ n_A, ε_e,A = ε_tr,A − Δγ (3/2) s_A / q_tr;
-        # Cp⁻¹ = F⁻¹ be F⁻ᵀ = Σ exp(2 ε_e,A) u_A ⊗ u_A
-        r3 = 3.0 * dg / q_tr
-        w0 = x0 * math.exp(-r3 * s0)
-        w1 = x1 * math.exp(-r3 * s1)
-        w2 = x2 * math.exp(-r3 * s2)
-        v0x = w0 * u0x; v0y = w0 * u0y; v0z = w0 * u0z
-        v1x = w1 * u1x; v1y = w1 * u1y; v1z = w1 * u1z
-        v2x = w2 * u2x; v2y = w2 * u2y; v2z = w2 * u2z
-        c01 = v0x * u0y + v1x * u1y + v2x * u2y
-        c02 = v0x * u0z + v1x * u1z + v2x * u2z
-        c12 = v0y * u0z + v1y * u1z + v2y * u2z
-        h_new[0] = v0x * u0x + v1x * u1x + v2x * u2x
+        # exponential map: be = exp(2 ε_e) = exp(tr L/3) exp(fac dev L); Cp⁻¹ = F⁻¹ be F⁻ᵀ
+        E = exp_sym((fac * dL[0], fac * dL[1], fac * dL[2], fac * dL[3], fac * dL[4], fac * dL[5]))
+        v = math.exp(m3)
+        e00 = v * E[0]; e01 = v * E[1]; e02 = v * E[2]
+        e11 = v * E[3]; e12 = v * E[4]; e22 = v * E[5]
+        # T = F⁻¹ be (row i of F⁻¹ times be), then Cp⁻¹ = T F⁻ᵀ (upper triangle, mirrored)
+        r00 = Finv[0] * e00 + Finv[1] * e01 + Finv[2] * e02
+        r01 = Finv[0] * e01 + Finv[1] * e11 + Finv[2] * e12
+        r02 = Finv[0] * e02 + Finv[1] * e12 + Finv[2] * e22
+        r10 = Finv[3] * e00 + Finv[4] * e01 + Finv[5] * e02
+        r11 = Finv[3] * e01 + Finv[4] * e11 + Finv[5] * e12
+        r12 = Finv[3] * e02 + Finv[4] * e12 + Finv[5] * e22
+        r20 = Finv[6] * e00 + Finv[7] * e01 + Finv[8] * e02
+        r21 = Finv[6] * e01 + Finv[7] * e11 + Finv[8] * e12
+        r22 = Finv[6] * e02 + Finv[7] * e12 + Finv[8] * e22
+        c01 = r00 * Finv[3] + r01 * Finv[4] + r02 * Finv[5]
+        c02 = r00 * Finv[6] + r01 * Finv[7] + r02 * Finv[8]
+        c12 = r10 * Finv[6] + r11 * Finv[7] + r12 * Finv[8]
+        h_new[0] = r00 * Finv[0] + r01 * Finv[1] + r02 * Finv[2]
         h_new[1] = c01
         h_new[2] = c02
         h_new[3] = c01
-        h_new[4] = v0y * u0y + v1y * u1y + v2y * u2y
+        h_new[4] = r10 * Finv[3] + r11 * Finv[4] + r12 * Finv[5]
         h_new[5] = c12
         h_new[6] = c02
         h_new[7] = c12
-        h_new[8] = v0z * u0z + v1z * u1z + v2z * u2z
+        h_new[8] = r20 * Finv[6] + r21 * Finv[7] + r22 * Finv[8]
         eps_p = eps_p_n + dg
         h_new[HIST_EPS_P] = eps_p
         h_new[HIST_DAMAGE] = eps_p / epsL  # ε_L = inf gives D = 0
@@ -751,7 +831,7 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         for m in range(N_HISTORY_J2, h_old.shape[0]):  # columns of wider laws: carried
             h_new[m] = h_old[m]
         if h_new[HIST_DAMAGE] >= 1.0:  # fails in this step: its stored energy is released
-            psi_e = fac * fac * (s0 * s0 + s1 * s1 + s2 * s2) / (4.0 * mu) + 0.5 * K * tre * tre
+            psi_e = 0.25 * mu * fac * fac * dn2 + 0.5 * K * tre * tre
             h_new[HIST_W_REL] += psi_e - failed_energy(J, K, prm[11])
             failed_stress(cof, J, K, prm[11], P, A, want_tangent)
             return status
@@ -759,6 +839,27 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         _copy(h_old, h_new)
 
     if want_tangent:
+        x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(be[0], be[1], be[2],
+                                                                        be[3], be[4], be[5])
+        # principal trial log strains and stresses of the same state
+        e0 = 0.5 * math.log(x0)
+        e1 = 0.5 * math.log(x1)
+        e2 = 0.5 * math.log(x2)
+        tr = e0 + e1 + e2
+        pe = K * tr
+        s0 = 2.0 * mu * (e0 - tr / 3.0)
+        s1 = 2.0 * mu * (e1 - tr / 3.0)
+        s2 = 2.0 * mu * (e2 - tr / 3.0)
+        # u_A = F⁻¹ n_A
+        u0 = (Finv[0] * n0x + Finv[1] * n0y + Finv[2] * n0z,
+              Finv[3] * n0x + Finv[4] * n0y + Finv[5] * n0z,
+              Finv[6] * n0x + Finv[7] * n0y + Finv[8] * n0z)
+        u1 = (Finv[0] * n1x + Finv[1] * n1y + Finv[2] * n1z,
+              Finv[3] * n1x + Finv[4] * n1y + Finv[5] * n1z,
+              Finv[6] * n1x + Finv[7] * n1y + Finv[8] * n1z)
+        u2 = (Finv[0] * n2x + Finv[1] * n2y + Finv[2] * n2z,
+              Finv[3] * n2x + Finv[4] * n2y + Finv[5] * n2z,
+              Finv[6] * n2x + Finv[7] * n2y + Finv[8] * n2z)
         # principal algorithmic moduli D_AB = ∂τ_A/∂ε_tr,B
         cpl = 0.0
         if plastic:
@@ -769,7 +870,7 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
              (kd + cpl * s1 * s0, kd + dd + cpl * s1 * s1, kd + cpl * s1 * s2),
              (kd + cpl * s2 * s0, kd + cpl * s2 * s1, kd + dd + cpl * s2 * s2))
         j2_tangent(A, P, Finv, ((n0x, n0y, n0z), (n1x, n1y, n1z), (n2x, n2y, n2z)),
-                   ((u0x, u0y, u0z), (u1x, u1y, u1z), (u2x, u2y, u2z)), (x0, x1, x2), (t0, t1, t2), D)
+                   (u0, u1, u2), (x0, x1, x2), (pe + fac * s0, pe + fac * s1, pe + fac * s2), D)
     return status
 
 
@@ -800,18 +901,13 @@ def stored_energy_point(F, h, prm):
         K = lam + 2.0 * mu / 3.0
         if h[HIST_DAMAGE] >= 1.0:
             return failed_energy(J, K, prm[11])
-        b00, b01, b02, b11, b12, b22 = _be_trial(F, h)
-        e = eigh3(b00, b01, b02, b11, b12, b22)
-        if not (e[0] > 0.0 and e[1] > 0.0 and e[2] > 0.0):
+        L, ok = log_spd(_be_trial(F, h))  # 2 ε_e
+        if not ok:
             return np.nan
-        e0 = 0.5 * math.log(e[0])
-        e1 = 0.5 * math.log(e[1])
-        e2 = 0.5 * math.log(e[2])
-        tr = e0 + e1 + e2
-        d0 = e0 - tr / 3.0
-        d1 = e1 - tr / 3.0
-        d2 = e2 - tr / 3.0
-        return mu * (d0 * d0 + d1 * d1 + d2 * d2) + 0.5 * K * tr * tr
+        m3 = (L[0] + L[3] + L[5]) / 3.0
+        tr = 1.5 * m3  # tr ε_e
+        dev2 = _sym_norm2((L[0] - m3, L[1], L[2], L[3] - m3, L[4], L[5] - m3))
+        return 0.25 * mu * dev2 + 0.5 * K * tr * tr
     # C = FᵀF
     c00 = F[0, 0] * F[0, 0] + F[1, 0] * F[1, 0] + F[2, 0] * F[2, 0]
     c11 = F[0, 1] * F[0, 1] + F[1, 1] * F[1, 1] + F[2, 1] * F[2, 1]

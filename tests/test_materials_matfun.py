@@ -1,7 +1,9 @@
-"""The closed-form eigen-decomposition of the J2 kernel (:func:`kernels.eigh3`) against
-numpy.linalg.eigh (LAPACK), on random symmetric matrices and on the hard cases: exactly and nearly
-repeated eigenvalues (pairs and triples), diagonal matrices, extreme scales, and the near-identity
-elastic b_e of metals. And the J2 point at a trial b_e with a nearly repeated eigenvalue."""
+"""Functions of symmetric 3×3 matrices in the J2 kernel against numpy.linalg.eigh (LAPACK): the
+closed-form eigen-decomposition :func:`kernels.eigh3` on random matrices and the hard cases (exactly
+and nearly repeated eigenvalues, pairs and triples, diagonal matrices, extreme scales, the
+near-identity elastic b_e of metals); the matrix logarithm and exponential (series near I, spectral
+beyond) on both sides of their switch; and the J2 point on both sides of it and at a trial b_e with
+a nearly repeated eigenvalue."""
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -105,6 +107,8 @@ def test_closed_form_eigen_against_lapack_on_a_random_battery():
     np.array([[0.0, 1.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 0.0]]),      # 2, −1, −1
     -np.array([[0.0, 1.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 0.0]]),     # −2, 1, 1 (r < 0)
     np.array([[1e300, 1e299, 0.0], [1e299, -1e300, 1e298], [0.0, 1e298, 5e299]]),
+    # a repeated pair split by ~1e-155 (found by hypothesis: squares of the 2×2 rotation underflowed)
+    np.array([[0.0, 4e-35, 0.0], [4e-35, 4.0, 1.2e-120], [0.0, 1.2e-120, 0.0]]),
 ])
 def test_closed_form_eigen_hard_cases(S):
     check(S)
@@ -162,3 +166,79 @@ def test_j2_tangent_at_nearly_repeated_eigenvalues(split):
         Afd[:, :, k, l] = (Pp[0] - Pm[0]) / (2 * step)
     err = np.max(np.abs(A[0] - Afd)) / np.max(np.abs(Afd))
     assert err < TOL_FD, err
+
+
+# --- matrix logarithm and exponential --------------------------------------------------------
+def sym6(M):
+    return (M[0, 0], M[0, 1], M[0, 2], M[1, 1], M[1, 2], M[2, 2])
+
+
+def full(t):
+    return np.array([[t[0], t[1], t[2]], [t[1], t[3], t[4]], [t[2], t[4], t[5]]])
+
+
+def spd_with_log_size(rng, size):
+    """b = exp(L) with L symmetric, ‖L‖_F = size (eigh reference: L is known exactly)."""
+    Q = random_rotation(rng)
+    d = rng.standard_normal(3)
+    d *= size / np.linalg.norm(d)
+    return Q @ np.diag(np.exp(d)) @ Q.T, Q @ np.diag(d) @ Q.T
+
+
+def test_log_and_exp_against_the_spectral_reference_across_the_switch():
+    """ln b against Q diag(ln x) Qᵀ, for ‖ln b‖ from 1e-9 to 1.5 (the series ends at ‖Y‖_F = 0.2,
+    ‖ln b‖ ≈ 0.4), and exp(D) likewise (series to ‖D‖ = 0.25). Absolute errors: b and
+    its reference are built from the same (Q, d) with round-off ~ 4 eps |b| each; ln amplifies an
+    error of b by 1/λ_min(b) ≤ e; the series adds ≤ 2⁻⁵⁶ relative and a few roundings per term.
+    100 eps (of max(1, |b|)) is about three times that budget."""
+    rng = np.random.default_rng(71)
+    n_series = n_spectral = 0
+    for k in range(3000):
+        size = 10.0 ** rng.uniform(-9, -1) if k % 2 else rng.uniform(0.1, 1.5)
+        b, L = spd_with_log_size(rng, size)
+        b = 0.5 * (b + b.T)
+        Ls, ok = kernels.log_spd(sym6(b))
+        assert ok
+        err = np.max(np.abs(full(Ls) - L))
+        assert err <= 100 * EPS * np.max(np.abs(b)), (size, err / EPS)
+        Y = np.linalg.solve(b + np.eye(3), b - np.eye(3))
+        if np.linalg.norm(Y) <= kernels.LOG_SERIES_MAX:
+            n_series += 1
+        else:
+            n_spectral += 1
+        # exp of a symmetric D of the same size
+        E = kernels.exp_sym(sym6(L))
+        assert np.max(np.abs(full(E) - b)) <= 100 * EPS * np.max(np.abs(b)), size
+    assert n_series > 1500 and n_spectral > 1000  # both sides of the switch were exercised
+
+
+def test_log_of_non_positive_definite_matrix_is_refused():
+    for M in (np.diag([1.0, 1.0, -0.1]), np.diag([1.0, 0.0, 1.0]), np.full((3, 3), np.nan)):
+        _, ok = kernels.log_spd(sym6(M))
+        assert not ok
+
+
+def hencky_P(mat, F):
+    """P of Hencky elasticity at a virgin J2 point, from numpy's eigh (independent reference):
+    τ = λ tr ε I + 2μ ε, ε = ½ ln(F Fᵀ), P = τ F⁻ᵀ."""
+    w, V = np.linalg.eigh(F @ F.T)
+    eps = V @ np.diag(0.5 * np.log(w)) @ V.T
+    tau = mat.lam * np.trace(eps) * np.eye(3) + 2 * mat.mu * eps
+    return tau @ np.linalg.inv(F).T
+
+
+@pytest.mark.parametrize("amp", [1e-3, 0.05, 0.15, 0.2, 0.3, 0.6])
+def test_j2_elastic_stress_on_both_sides_of_the_series_switch(amp):
+    """A J2 material that stays elastic to large strains (Swift C = 1e15 Pa), stretched by
+    F = R (I + amp G): its P is the Hencky stress, whichever branch computes ln be. 1e-12: the
+    stresses are O(μ |ε|) and both sides carry O(10 eps) relative round-off, plus the reference's
+    eigh (κ of the logs ≲ 10 at these strains)."""
+    mat = TABLE1_STEEL.replace(C=1e15)
+    rng = np.random.default_rng(72)
+    G = rng.standard_normal((3, 3))
+    F = random_rotation(rng) @ (np.eye(3) + amp * G / np.linalg.norm(G))
+    P, hn, st_ = kernels.material_points(np.ascontiguousarray(F[None]), mat.initial_history(1),
+                                         mat.params()[None], np.zeros(1, np.int64))
+    assert st_[0] == 0 and hn[0, 9] == 0.0  # elastic
+    ref = hencky_P(mat, F)
+    assert np.max(np.abs(P[0] - ref)) <= 1e-12 * np.max(np.abs(ref))
