@@ -506,24 +506,27 @@ def mooney_rivlin_point(F, prm, P, A, want_tangent):
 # --------------------------------------------------------------------------------------------
 @njit(**JIT)
 def swift(C, eps0, n, eps_p):
-    """Swift hardening σ_y = C (ε_p + ε0)^n (paper 000, Table 1), its slope H = dσ_y/dε_p and
-    curvature H' = d²σ_y/dε_p² = (n − 1) H / (ε_p + ε0) (≤ 0, |H'| decreasing in ε_p)."""
+    """Swift hardening σ_y = C (ε_p + ε0)^n (paper 000, Table 1) and its derivatives
+    H = dσ_y/dε_p = n σ_y/(ε_p + ε0), H' = (n − 1) H/(ε_p + ε0) ≤ 0 and
+    H'' = (n − 2) H'/(ε_p + ε0) ≥ 0; |H'| and H'' decrease with ε_p."""
     base = eps_p + eps0
     sy = C * base ** n
     H = n * sy / base
-    return sy, H, (n - 1.0) * H / base
+    dH = (n - 1.0) * H / base
+    return sy, H, dH, (n - 2.0) * dH / base
 
 
 @njit(**JIT)
 def linear_hardening(sy0, H, eps_p):
-    """Linear hardening σ_y = σ_y0 + H ε_p, its slope H and curvature 0."""
-    return sy0 + H * eps_p, H, 0.0
+    """Linear hardening σ_y = σ_y0 + H ε_p and its derivatives H, 0, 0."""
+    return sy0 + H * eps_p, H, 0.0, 0.0
 
 
 @njit(**JIT)
 def yield_stress(prm, eps_p):
-    """Kirchhoff yield stress σ_y(ε_p) of a J2 parameter row, its slope H and curvature H':
-    :func:`swift` (prm[10] = 0) or :func:`linear_hardening` (prm[10] = 1)."""
+    """Kirchhoff yield stress σ_y(ε_p) of a J2 parameter row and its derivatives (H, H', H''):
+    :func:`swift` (prm[10] = 0) or :func:`linear_hardening` (prm[10] = 1). Both are concave
+    (H' ≤ 0) with |H'| and |H''| non-increasing in ε_p, which :func:`j2_return_map` relies on."""
     if prm[10] == 1.0:
         return linear_hardening(prm[3], prm[4], eps_p)
     return swift(prm[3], prm[4], prm[5], eps_p)
@@ -549,28 +552,30 @@ def plastic_work(prm, eps_p, sy):
 
 
 @njit(**JIT)
-def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, tol):
+def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol):
     """Plastic multiplier of the radial return in principal Kirchhoff space (de Souza Neto et al.
     2008, Box 14.3): the root Δγ of r(Δγ) = q_tr − 3μΔγ − σ_y(ε_p,n + Δγ).
 
-    r is decreasing and convex (σ_y concave): a Newton step lands left of the root, and from
-    there Newton converges monotonically; it is safeguarded by bisection on the bracket
-    [0, q_tr/3μ]. Stops at |r| ≤ tol σ_y, either measured, or bounded a priori after a Newton
-    step δ from a point left of the root: with κ = |H'|/(2(3μ + H)) there (|H'| is largest at the
-    left end) and κ (hi − Δγ) ≤ ¼, the step's error is e ≤ κ (δ + e)² ≤ (16/9) κ δ², so the
-    residual at Δγ + δ is at most (3μ + H) e ≤ (8/9) |H'| δ²; when that is within tol σ_y the
-    step is accepted without evaluating σ_y once more (one power function fewer for Swift; the
-    linear law stops after its exact first step), with σ_y and H taken from their Taylor
-    expansions (errors ½|H'| δ² ≤ tol σ_y and O(δ²)).
+    r is decreasing and convex (σ_y concave): Newton steps δ_N = r/s (s = 3μ + H) from a point
+    left of the root stay left of it and converge monotonically; they are safeguarded by
+    bisection on the bracket [0, q_tr/3μ]. It stops at |r| ≤ tol σ_y, either measured, or
+    bounded a priori for the second-order step δ = δ_N (1 + κ δ_N), κ = |H'|/(2s), from a point
+    left of the root: by Taylor's theorem at Δγ, with r(Δγ) − s δ_N = 0,
+        |r(Δγ + δ)| ≤ |H'| κ δ_N³ (1 + κ δ_N/2) + H'' δ³/6
+    (H'' at Δγ bounds it on [Δγ, Δγ + δ]: it does not increase). When that is within tol σ_y the
+    second-order step is accepted without evaluating σ_y again, with σ_y and H at the end from
+    their Taylor expansions (errors ≤ H'' δ³/6 and H'' δ²/2). The steps of explicit dynamics
+    (Δγ ≲ 1e-3) then cost two power functions in all with Swift (the yield check's and one
+    here); the linear law stops after its first step.
 
-    sy, H, dH: σ_y, H, H' at ε_p,n (the caller's yield check has them). Returns
+    sy, H, dH, ddH: σ_y, H, H', H'' at ε_p,n (the caller's yield check has them). Returns
     (Δγ, σ_y, H, status), σ_y and H at ε_p,n + Δγ."""
     lo = 0.0
     hi = q_tr / (3.0 * mu)
     dg = 0.0
     for it in range(NEWTON_MAXIT):
         if it > 0:
-            sy, H, dH = yield_stress(prm, eps_p_n + dg)
+            sy, H, dH, ddH = yield_stress(prm, eps_p_n + dg)
         r = q_tr - 3.0 * mu * dg - sy
         if abs(r) <= tol * sy:
             return dg, sy, H, OK
@@ -580,15 +585,19 @@ def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, tol):
             hi = dg
         if hi - lo <= 4e-16 * hi:  # bracket at round-off: nothing better is representable
             return dg, sy, H, OK
-        slope = 3.0 * mu + H
-        step = r / slope
-        if not (lo < dg + step < hi):
+        s = 3.0 * mu + H
+        dN = r / s
+        if r > 0.0:  # left of the root: try the second-order step with its a-priori bound
+            kap = -0.5 * dH / s
+            step = dN * (1.0 + kap * dN)
+            bound = -dH * kap * dN * dN * dN * (1.0 + 0.5 * kap * dN) + ddH * step * step * step / 6.0
+            if bound <= tol * sy and dg + step < hi:
+                return (dg + step, sy + step * (H + 0.5 * dH * step), H + dH * step, OK)
+        if lo < dg + dN < hi:
+            dg += dN
+        else:
             dg = 0.5 * (lo + hi)
-            continue
-        if r > 0.0 and -dH * (hi - dg) <= 0.5 * slope and -dH * step * step <= 1.125 * tol * sy:
-            return dg + step, sy + step * (H + 0.5 * dH * step), H + dH * step, OK
-        dg += step
-    sy, H, dH = yield_stress(prm, eps_p_n + dg)
+    sy, H, dH, ddH = yield_stress(prm, eps_p_n + dg)
     return dg, sy, H, NOT_CONVERGED
 
 
@@ -769,13 +778,14 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     sy = prm[7]  # σ_y(0) ≤ σ_y(ε_p): below it the step is elastic without evaluating σ_y(ε_p)
     H = 0.0
     dH = 0.0
+    ddH = 0.0
     if q_tr > sy:
-        sy, H, dH = yield_stress(prm, eps_p_n)
+        sy, H, dH, ddH = yield_stress(prm, eps_p_n)
         plastic = q_tr - sy > tol * sy
     dg = 0.0
     fac = 1.0
     if plastic:
-        dg, sy, H, status = j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, tol)
+        dg, sy, H, status = j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol)
         fac = 1.0 - 3.0 * mu * dg / q_tr
     c = mu * fac
     t00 = p + c * dL[0]
