@@ -31,7 +31,8 @@ History per point (``n_history`` columns): none for the elastic laws; for J2 thi
 left Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed; D = ε_p/ε_L;
 W_p the plastic work ∫₀^{ε_p} σ_y dε_p and W_rel the stored energy released when the point failed,
 both per unit reference volume, J/m³ (:func:`energies`). Along any path the work done on a point
-is ∫ P : dF = ψ + W_p + W_rel, ψ the stored energy (:func:`energies`).
+is ∫ P : dF = ψ + W_p + W_rel, ψ the stored energy (:func:`energies`), up to the quadrature error
+of the path's time steps.
 
 Deformation gradients are always 3×3; plane strain is F33 = 1 with the 2×2 block taken from P.
 
@@ -64,7 +65,7 @@ class Material:
     """A constitutive law and its constants (SI units).
 
     Build with the class methods (:meth:`svk`, :meth:`neo_hooke`, :meth:`mooney_rivlin`,
-    :meth:`j2`); they validate the constants and raise ``ValueError`` naming the parameter and its
+    :meth:`j2`, :meth:`j2_linear`); they validate the constants and raise ``ValueError`` naming the parameter and its
     allowed range.
     """
 

@@ -1,8 +1,10 @@
 """Single-thread speed of the finite-strain J2 material point, in points per second.
 
-Four cases, each a batch of ``n`` points through :func:`kernels.j2_point` in a serial compiled loop (one thread; P and the history written to their rows, the tangent to one
-reused (3, 3, 3, 3) block as an assembly loop would consume it, so that the timing is the point
-routine's and not the memory traffic of an (n, 81) array):
+Four cases, each a batch of ``n`` points through :func:`kernels.j2_point` in a serial compiled
+loop (one thread; P and the history written to their rows, the tangent to one reused
+(3, 3, 3, 3) block as an assembly loop would consume it, so that the timing is the point routine's
+and not the memory traffic of an (n, 81) array). Times are the thread's CPU time (best of
+``repeat``), which other jobs on a shared machine disturb less than wall time:
 
 * ``elastic``: trial states inside the yield surface (rotated small strains, virgin history);
 * ``plastic``: a further step of 5e-4 along a proportional path from ε ≈ 0.02, every point yields;
@@ -10,8 +12,9 @@ routine's and not the memory traffic of an (n, 81) array):
 
 ``--baseline REV`` times the kernels of a git revision in the same run (its source is read with
 ``git show REV:workbench/materials/kernels.py`` into a temporary module), so that the ratio of the
-two is measured under the same load of a shared machine. The older layout had 10 parameters and 11
-J2 history columns (revisions up to 23e34f0): the baseline gets those leading columns.
+two is measured under the same load of a shared machine (the two alternate within each round). The
+older layout had 10 parameters and 11 J2 history columns (revisions up to 23e34f0): the baseline
+gets those leading columns.
 
     python3 -m workbench.materials.bench --baseline 23e34f0
 """
@@ -43,7 +46,7 @@ def _rotations(rng, n):
     return Q
 
 
-def states(n: int = 100_000, seed: int = 0, material=TABLE1_STEEL):
+def states(n: int = 20_000, seed: int = 0, material=TABLE1_STEEL):
     """(F, h) of the elastic and of the plastic case: F (n, 3, 3), h (n, n_history)."""
     rng = np.random.default_rng(seed)
     prm = material.params()[None]
@@ -115,7 +118,7 @@ def load_baseline(rev: str):
     return mod
 
 
-def run(baseline: str | None = None, n: int = 100_000, repeat: int = 5) -> dict:
+def run(baseline: str | None = None, n: int = 20_000, repeat: int = 15) -> dict:
     """{case: {"current": points/s, "baseline": points/s (with ``baseline``)}}, one thread."""
     st = states(n)
     prm = TABLE1_STEEL.params()
@@ -134,8 +137,8 @@ def run(baseline: str | None = None, n: int = 100_000, repeat: int = 5) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--baseline", help="git revision to time in the same run")
-    ap.add_argument("--n", type=int, default=100_000, help="points per batch")
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--n", type=int, default=20_000, help="points per batch")
+    ap.add_argument("--repeat", type=int, default=15)
     a = ap.parse_args(argv)
     res = run(a.baseline, a.n, a.repeat)
     print(f"J2 material point, 1 thread, {a.n} points, best of {a.repeat} "

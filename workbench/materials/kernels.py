@@ -706,7 +706,8 @@ def failed_stress(cof, J, K, mode, P, A, want_tangent):
                 for j in range(3):
                     for k in range(3):
                         for l in range(3):
-                            A[i, j, k, l] = a * cof[3 * i + j] * cof[3 * k + l] + b * cof[3 * i + l] * cof[3 * k + j]
+                            A[i, j, k, l] = (a * cof[3 * i + j] * cof[3 * k + l]
+                                             + b * cof[3 * i + l] * cof[3 * k + j])
     else:
         _zero(P, A, want_tangent)
 
