@@ -27,7 +27,7 @@ F exact for affine (and, with the quadratic basis, quadratic) motions,
 (p(Δ) = Δ, T = I for the linear basis; p = (Δ, Δ_i Δ_k), T = (I, 0) for the quadratic one). Since
 only G changes, F, the force −∂Π/∂x, the conservation of linear and angular momentum (F is a sum
 of differences x_b − x_a, so Π is invariant under rigid motions for any G) and the symmetric
-tangent K = ∂²Π/∂x∂x of :func:`sph.csph.tangent_matrix` are kept unchanged.
+tangent K = ∂²Π/∂x∂x of :func:`sph.total_lagrangian.tangent_matrix` are kept unchanged.
 
 The correction (:func:`consistent_gradients`) minimises Σ_p |δG_p|²/ω_p subject to (R) and (I).
 With multipliers Λ_a (m×d, rows) and μ_c (d, columns),
@@ -817,14 +817,15 @@ def column_mask(fixed, mode: str = "dof") -> np.ndarray:
 
 def consistent_discretisation(disc, V_integration, normals, free, basis: str = "quadratic",
                               weights: str | np.ndarray = "uniform", **options):
-    """A :class:`sph.csph.Discretisation` whose gradients satisfy the force patch test: ``disc``
+    """A :class:`sph.total_lagrangian.Discretisation` whose gradients satisfy the force patch test: ``disc``
     (any G with F = Σ (x_b − x_a) ⊗ G_ab: CSPH's, or HPM's through
     :func:`sph.hpm.wls_discretisation`) with G replaced by :func:`consistent_gradients`, G_ba
     recomputed, and V = ``V_integration`` (the energy Σ V_a ψ(F_a); masses ``disc.m`` unchanged).
     ``weights``: a kind of :func:`pair_weights` (radius: the support 2h, or r_e for
     ``disc.kernel == "wls"``) or an array. Returns (Discretisation, info)."""
-    from . import csph
+    from .correction import reverse_gradients
     from .kernels import SUPPORT
+    from .total_lagrangian import Discretisation
 
     if isinstance(weights, str):
         radius = disc.h if disc.kernel == "wls" else SUPPORT * disc.h
@@ -832,7 +833,7 @@ def consistent_discretisation(disc, V_integration, normals, free, basis: str = "
     Vi = np.ascontiguousarray(V_integration, dtype=np.float64)
     G, info = consistent_gradients(disc.X, Vi, disc.indptr, disc.indices, disc.G, normals, free,
                                    basis, weights, **options)
-    GT = csph.reverse_gradients(disc.indptr, disc.indices, G)
-    new = csph.Discretisation(disc.X, Vi, disc.m, disc.h, disc.kernel, disc.indptr, disc.indices,
-                              G, GT, disc.L, disc.ok)
+    GT = reverse_gradients(disc.indptr, disc.indices, G)
+    new = Discretisation(disc.X, Vi, disc.m, disc.h, disc.kernel, disc.indptr, disc.indices,
+                         G, GT, disc.L, disc.ok)
     return new, info

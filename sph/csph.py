@@ -14,9 +14,19 @@ f = −∂Π/∂x of the stored energy Π = Σ_a V_a ψ(F_a) (eq. 7–24): linea
 conserved to round-off, the tangent is symmetric. Explicit dynamics in one fused velocity-Verlet
 loop; statics by Newton (:mod:`sph.static`); optional hourglass control (:mod:`sph.hourglass`).
 
+Integration (``integration``): ``"consistent"`` (the default) replaces G by the smallest change
+that makes the force patch test exact (:mod:`sph.consistency`: uniform stretch and shear are
+discrete equilibria with free faces, symmetry planes, loaded faces and clamps, at any resolution,
+while F stays exact for affine — and with the quadratic correction quadratic — motions and the
+force stays −∂Π/∂x), with volumes exact for quadratics and a clamp modelled as a face of the body
+(the held particles behind it detached, the clamped corners carrying no volume); ``"nodal"`` is
+plain nodal integration, the paper's.
+
 Options of :func:`build`: ``h_ratio`` (h/Δx, default 1.1), ``kernel`` ('cubic_spline' or
 'wendland_c2'), ``correction`` ('quadratic', the default; 'linear' = the paper's Bonet–Lok
-correction), ``hourglass`` (α ≥ 0, 0 = off).
+correction), ``integration`` ('consistent', the default; 'nodal'), ``hourglass`` (α ≥ 0, 0 = off).
+The registry (:data:`sph.METHODS`) names the variants: ``csph`` (quadratic, consistent),
+``csph_quad`` (quadratic, nodal) and ``csph_bl`` (Bonet–Lok, nodal: paper 000 as printed).
 """
 from __future__ import annotations
 
@@ -31,7 +41,9 @@ from . import total_lagrangian as tl
 NAME = "csph"
 OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland_c2'",
                correction="'quadratic' (default) | 'linear' (the paper's Bonet–Lok)",
+               integration="'consistent' (default) | 'nodal' (the paper's)",
                hourglass="hourglass-control coefficient α ≥ 0 (default 0)")
+INTEGRATIONS = ("consistent", "nodal")
 
 DEFAULT_CORRECTION = "quadratic"
 """Gradient correction used unless ``correction=`` is given. The paper's Bonet–Lok correction
@@ -76,20 +88,61 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
     return tl.Discretisation(X, V, mass, h, kernel, indptr, indices, G, GT, L, ok)
 
 
+def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
+               correction: str = DEFAULT_CORRECTION, weights: str = "uniform"):
+    """The integration-consistent discretisation of the particles ``ps``
+    (:class:`sph.particles.Particles` on a lattice): neighbours only within the body's integration
+    domain (held particles outside it — a clamp block behind its face — are detached), volumes
+    exact for quadratics (linear with the Bonet–Lok base) with the clamped corners excluded, and
+    the gradients of :func:`discretise` corrected by
+    :func:`sph.consistency.consistent_discretisation` on every free DOF. Returns
+    (Discretisation, info of the correction)."""
+    from .consistency import boundary_normals, column_mask, consistent_discretisation
+
+    if ps.origin is None or ps.domain_shape is None:
+        raise ValueError("integration: 'consistent' needs lattice particles (a region on the model's "
+                         "lattice); allowed for other arrangements: 'nodal'")
+    d = ps.dim
+    labels = ps.body * 2 + (~ps.domain).astype(np.int64)
+    disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
+                      body=labels if labels.max() > 0 else None)
+    inside = ps.domain_shape
+
+    def predicate(q):
+        return inside.contains(q, 0.0)
+
+    _, n1 = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin, order=1)
+    edge = np.count_nonzero(np.abs(n1) > 1e-9 * ps.dx ** (d - 1), axis=1) >= 2
+    corners = ps.clamped & ps.domain & edge
+    V_int, n_int = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin,
+                                    order=2 if correction == "quadratic" else 1,
+                                    exclude=corners if corners.any() else None)
+    return consistent_discretisation(disc, V_int, n_int, column_mask(ps.fixed, "dof"),
+                                     basis=correction, weights=weights)
+
+
 class CSPH(ParticleBody):
     """A CSPH body built from :class:`sph.particles.Particles` (see the module docstring)."""
 
     name = NAME
 
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
-                 correction: str = DEFAULT_CORRECTION, hourglass: float = 0.0):
+                 correction: str = DEFAULT_CORRECTION, integration: str = "consistent",
+                 hourglass: float = 0.0):
         super().__init__(particles)
         if particles.plane == "stress":
             raise ValueError("plane: 'stress' is not modelled by csph (F33 = 1: plane strain); "
                              "allowed: 'strain' or a 3-D model")
+        if integration not in INTEGRATIONS:
+            raise ValueError(f"integration: {integration!r} is not one of {', '.join(map(repr, INTEGRATIONS))}")
         ps = particles
-        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
-                          body=ps.body if len(ps.body_names) > 1 else None)
+        self.integration = integration
+        if integration == "consistent":
+            disc, self.consistency = consistent(ps, h_ratio, kernel, correction)
+            self.normals = self.consistency["normals"]
+        else:
+            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
+                              body=ps.body if len(ps.body_names) > 1 else None)
         self.disc = disc
         self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
         self.m = disc.m
