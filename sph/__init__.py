@@ -25,9 +25,11 @@ METHODS = {
     "csph_quad": ("sph.csph", {"correction": "quadratic", "integration": "nodal"}),
     "csph_bl": ("sph.csph", {"correction": "linear", "integration": "nodal"}),
     "hpm": ("sph.hpm", {}),
+    "hpm_vc": ("sph.csph", {"gradient": "wls"}),
     "sph": ("sph.classic", {}),
 }
 """Particle method name (the ``solver`` of the datasets) -> (module, default options). ``csph`` is
 the integration-consistent corrected SPH (quadratic correction), ``csph_quad`` the same gradient
 with nodal integration, ``csph_bl`` paper 000's CSPH as printed (Bonet–Lok correction, nodal
-integration); ``hpm`` paper 004's method; ``sph`` classic SPH (paper 003)."""
+integration); ``hpm`` paper 004's method, ``hpm_vc`` its gradient with the consistent integration
+(quadratic basis); ``sph`` classic SPH (paper 003)."""

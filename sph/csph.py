@@ -25,8 +25,11 @@ plain nodal integration, the paper's.
 Options of :func:`build`: ``h_ratio`` (h/Δx, default 1.1), ``kernel`` ('cubic_spline' or
 'wendland_c2'), ``correction`` ('quadratic', the default; 'linear' = the paper's Bonet–Lok
 correction), ``integration`` ('consistent', the default; 'nodal'), ``hourglass`` (α ≥ 0, 0 = off).
-The registry (:data:`sph.METHODS`) names the variants: ``csph`` (quadratic, consistent),
-``csph_quad`` (quadratic, nodal) and ``csph_bl`` (Bonet–Lok, nodal: paper 000 as printed).
+``gradient`` ('kernel', the default; 'wls': HPM's weighted-least-squares gradient, 004 eq. 4,
+with ``re_ratio`` — HPM is CSPH with that gradient, so its integration-consistent form is this
+body). The registry (:data:`sph.METHODS`) names the variants: ``csph`` (quadratic, consistent),
+``csph_quad`` (quadratic, nodal), ``csph_bl`` (Bonet–Lok, nodal: paper 000 as printed) and
+``hpm_vc`` (HPM's gradient, consistent integration with the quadratic basis).
 """
 from __future__ import annotations
 
@@ -42,8 +45,12 @@ NAME = "csph"
 OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland_c2'",
                correction="'quadratic' (default) | 'linear' (the paper's Bonet–Lok)",
                integration="'consistent' (default) | 'nodal' (the paper's)",
-               hourglass="hourglass-control coefficient α ≥ 0 (default 0)")
+               hourglass="hourglass-control coefficient α ≥ 0 (default 0)",
+               gradient="'kernel' (default: the corrected kernel gradient) | 'wls' (HPM's "
+                        "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
+               re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)")
 INTEGRATIONS = ("consistent", "nodal")
+GRADIENTS = ("kernel", "wls")
 
 DEFAULT_CORRECTION = "quadratic"
 """Gradient correction used unless ``correction=`` is given. The paper's Bonet–Lok correction
@@ -65,7 +72,9 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
 
     ``correction``: ``"linear"`` — Bonet–Lok, eq. 31 and 34 (the paper's CSPH); ``"quadratic"`` —
     :func:`sph.correction.quadratic_gradients` (exact for quadratic fields; the same force and
-    conservation)."""
+    conservation). Where a particle has too few neighbours for the quadratic fit (a block of two
+    particles per edge), the whole body falls back to the linear correction (``disc.correction``
+    says which was used)."""
     if correction not in CORRECTIONS:
         raise ValueError(f"correction: {correction!r} is not one of {', '.join(map(repr, CORRECTIONS))}")
     if not (0.5 <= h_ratio <= 4.0):
@@ -80,16 +89,34 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
     if body is not None:
         indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
     L, ok = correction_matrices(X, V, indptr, indices, h, kind)
+    if correction == "quadratic":
+        G, ok_q = quadratic_gradients(X, V, indptr, indices, h, kind)
+        if ok_q.all():
+            ok = ok_q
+        else:
+            correction = "linear"
     if correction == "linear":
         G = corrected_gradients(X, V, indptr, indices, h, kind, L)
-    else:
-        G, ok = quadratic_gradients(X, V, indptr, indices, h, kind)
     GT = reverse_gradients(indptr, indices, G)
-    return tl.Discretisation(X, V, mass, h, kernel, indptr, indices, G, GT, L, ok)
+    return tl.Discretisation(X, V, mass, h, kernel, indptr, indices, G, GT, L, ok, correction)
+
+
+def wls(ps, re_ratio: float | None = None, body=None) -> tl.Discretisation:
+    """HPM's weighted-least-squares gradient (004 eq. 4–6) of the particles ``ps`` as a
+    gradient-form discretisation (:func:`sph.hpm.wls_discretisation`); ``body`` as in
+    :func:`discretise`."""
+    from . import hpm
+
+    model = hpm.build_model(ps.X, ps.V, ps.table[0], ps.dx,
+                            hpm.RE_RATIO if re_ratio is None else re_ratio, body=body)
+    disc = hpm.wls_discretisation(model)
+    disc.m = np.ascontiguousarray(ps.m, dtype=np.float64)
+    return disc
 
 
 def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
-               correction: str = DEFAULT_CORRECTION, weights: str = "uniform"):
+               correction: str = DEFAULT_CORRECTION, weights: str = "uniform",
+               gradient: str = "kernel", re_ratio: float | None = None):
     """The integration-consistent discretisation of the particles ``ps``
     (:class:`sph.particles.Particles` on a lattice): neighbours only within the body's integration
     domain (held particles outside it — a clamp block behind its face — are detached), volumes
@@ -104,8 +131,12 @@ def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline
                          "lattice); allowed for other arrangements: 'nodal'")
     d = ps.dim
     labels = ps.body * 2 + (~ps.domain).astype(np.int64)
-    disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
-                      body=labels if labels.max() > 0 else None)
+    labels = labels if labels.max() > 0 else None
+    if gradient == "wls":
+        disc = wls(ps, re_ratio, labels)
+        disc.correction = correction
+    else:
+        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=labels)
     inside = ps.domain_shape
 
     def predicate(q):
@@ -115,10 +146,12 @@ def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline
     edge = np.count_nonzero(np.abs(n1) > 1e-9 * ps.dx ** (d - 1), axis=1) >= 2
     corners = ps.clamped & ps.domain & edge
     V_int, n_int = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin,
-                                    order=2 if correction == "quadratic" else 1,
+                                    order=2 if disc.correction == "quadratic" else 1,
                                     exclude=corners if corners.any() else None)
-    return consistent_discretisation(disc, V_int, n_int, column_mask(ps.fixed, "dof"),
-                                     basis=correction, weights=weights)
+    new, info = consistent_discretisation(disc, V_int, n_int, column_mask(ps.fixed, "dof"),
+                                          basis=disc.correction, weights=weights)
+    new.correction = disc.correction
+    return new, info
 
 
 class CSPH(ParticleBody):
@@ -128,8 +161,10 @@ class CSPH(ParticleBody):
 
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
                  correction: str = DEFAULT_CORRECTION, integration: str = "consistent",
-                 hourglass: float = 0.0):
+                 hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None):
         super().__init__(particles)
+        if gradient not in GRADIENTS:
+            raise ValueError(f"gradient: {gradient!r} is not one of {', '.join(map(repr, GRADIENTS))}")
         if particles.plane == "stress":
             raise ValueError("plane: 'stress' is not modelled by csph (F33 = 1: plane strain); "
                              "allowed: 'strain' or a 3-D model")
@@ -137,12 +172,15 @@ class CSPH(ParticleBody):
             raise ValueError(f"integration: {integration!r} is not one of {', '.join(map(repr, INTEGRATIONS))}")
         ps = particles
         self.integration = integration
+        body = ps.body if len(ps.body_names) > 1 else None
         if integration == "consistent":
-            disc, self.consistency = consistent(ps, h_ratio, kernel, correction)
+            disc, self.consistency = consistent(ps, h_ratio, kernel, correction,
+                                                gradient=gradient, re_ratio=re_ratio)
             self.normals = self.consistency["normals"]
+        elif gradient == "wls":
+            disc = wls(ps, re_ratio, body)
         else:
-            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
-                              body=ps.body if len(ps.body_names) > 1 else None)
+            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=body)
         self.disc = disc
         self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
         self.m = disc.m

@@ -71,7 +71,7 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             Kfp = K[free][:, fixed]
             rhs = rhs - Kfp @ dxp
         try:
-            du = spla.spsolve(Kff.tocsc(), rhs)
+            du = solve_linear(Kff, rhs)
         except Exception:  # singular tangent
             return x, False, it
         if not np.all(np.isfinite(du)):
@@ -83,6 +83,20 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
         last_step = float(np.abs(du).max()) if du.size else 0.0
         x = x + step.reshape(x.shape)
     return x, False, max_iter
+
+
+DENSE_BELOW = 3000
+"""Free DOFs under which the Newton system is solved dense (LAPACK): the particle tangent couples
+second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
+
+
+def solve_linear(K, rhs) -> np.ndarray:
+    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, SuperLU above."""
+    import scipy.linalg as sla
+
+    if K.shape[0] < DENSE_BELOW:
+        return sla.solve(K.toarray(), rhs, check_finite=False)
+    return spla.spsolve(K.tocsc(), rhs)
 
 
 def spacing(body: Body) -> float:

@@ -3,11 +3,16 @@ discrete equilibrium with free, roller, loaded and held boundaries, 2-D and 3-D,
 jittered particles, CSPH's and HPM's gradients), F exact for affine (and quadratic) motions, the
 momenta, the symmetric tangent, the discrete divergence theorem of the lattice volumes and boundary
 vectors, the uniaxial J2 block on the exact curve at any resolution."""
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from sph import consistency as cs
-from sph import csph, hpm, lattice
+from sph import csph, hpm
+from sph import total_lagrangian as tl
+from sph.particles import box
+from sph.static import Constraints, newton
 from sph.diagnostics import total_force, total_torque
 from workbench.analytic import uniaxial_curve
 from workbench.materials import Material
@@ -34,12 +39,29 @@ A_SHEAR = np.array([[1.0, 0.02, 0.01], [0.015, 1.0, -0.01], [0.0, 0.012, 1.0]])
 A_BOTH = A_STRETCH @ A_SHEAR
 
 
+def _grid(lo, hi, dx, mode="node"):
+    """Node-lattice points of the box [lo, hi] and their trapezoid volumes (first axis slowest)."""
+    return box(lo, hi, dx, mode)
+
+
+def _block(size, n, mode="node"):
+    """The box [0, size] with n cells along the first edge; sets: the faces x0, x1, y0, y1 (z0, z1)."""
+    size = np.atleast_1d(np.asarray(size, dtype=np.float64))
+    dx = size[0] / n
+    X, V = _grid(np.zeros_like(size), size, dx, mode)
+    sets = {}
+    for k, ax in enumerate("xyz"[: len(size)]):
+        sets[f"{ax}0"] = np.nonzero(np.isclose(X[:, k], X[:, k].min()))[0]
+        sets[f"{ax}1"] = np.nonzero(np.isclose(X[:, k], X[:, k].max()))[0]
+    return SimpleNamespace(X=X, V=V, dx=dx, n=len(X), dim=len(size), sets=sets)
+
+
 def _box(dim, n, jitter=0.0, held=0, seed=3, h_ratio=1.3, base="linear"):
     """A node-lattice box [0, 1] × [0, 0.75] (× [0, 0.5]) with ``held`` layers of particles behind
     X = 0 (zero integration volume, all DOFs fixed), interior particles jittered by ±jitter·Δx."""
     size = (1.0, 0.75, 0.5)[:dim]
     dx = 1.0 / n
-    X, V = lattice.grid((-held * dx,) + (0.0,) * (dim - 1), size, dx, "node")
+    X, V = _grid((-held * dx,) + (0.0,) * (dim - 1), size, dx, "node")
     inside = cs.box_inside((0.0,) * dim, size, dx)
     Vi, nrm = cs.boundary_normals(X, dx, inside)
     if jitter:
@@ -54,7 +76,7 @@ def _box(dim, n, jitter=0.0, held=0, seed=3, h_ratio=1.3, base="linear"):
 def _patch_residual(disc, normals, fixed, A, mat):
     """max over free DOFs of |f_c + P n_c| / (|P| max|n|) at x = A X (uniform P)."""
     d = disc.dim
-    body = csph.Body(disc, mat)
+    body = tl.Body(disc, mat)
     x = disc.X @ A[:d, :d].T
     f = body.evaluate(x)
     P = body.stress("P")[:, :d, :d]
@@ -73,7 +95,7 @@ def _patch_residual(disc, normals, fixed, A, mat):
 def test_box_volumes_are_trapezoid_and_normals_are_face_shares(dim):
     size = (1.0, 0.6, 0.4)[:dim]
     dx = 0.2
-    X, V_trap = lattice.grid((0.0,) * dim, size, dx, "node")  # trapezoid volumes
+    X, V_trap = _grid((0.0,) * dim, size, dx, "node")  # trapezoid volumes
     V, n = cs.boundary_normals(X, dx, cs.box_inside((0.0,) * dim, size, dx))
     assert np.allclose(V, V_trap, rtol=0, atol=1e-15)
     # n_c,k = ±(area share of c on the face k) = ±V_c·2/Δx on the faces normal to k (trapezoid)
@@ -92,7 +114,7 @@ def test_union_of_boxes_divergence_theorem_and_quadratic_volumes():
     """L-shape [0,2]² less (1,2]²: Σ n = 0, Σ X ⊗ n = area·I (order 1), and order-2 volumes
     integrate every quadratic exactly (integrals in closed form)."""
     dx = 0.125
-    X, _ = lattice.grid((0.0, 0.0), (2.0, 2.0), dx, "node")
+    X, _ = _grid((0.0, 0.0), (2.0, 2.0), dx, "node")
 
     def inside(P):
         return (np.all((P > -dx / 8) & (P < 2 + dx / 8), axis=1)
@@ -119,7 +141,7 @@ def test_quadratic_volumes_are_gregory_weights():
     rule (3/8, 7/6, 23/24, 1, …)Δx, which integrates quadratics (and cubics) exactly."""
     dx = 0.1
     X = np.c_[np.arange(11) * dx, np.zeros(11)]
-    Xb, _ = lattice.grid((0.0, 0.0), (1.0, 0.6), dx, "node")
+    Xb, _ = _grid((0.0, 0.0), (1.0, 0.6), dx, "node")
     V, _ = cs.boundary_normals(Xb, dx, cs.box_inside((0, 0), (1.0, 0.6), dx), order=2)
     row = V[np.isclose(Xb[:, 1], 0.3)] / (dx * dx)  # an interior line: y-weight 1
     greg = np.array([3 / 8, 7 / 6, 23 / 24, 1, 1, 1, 1, 1, 23 / 24, 7 / 6, 3 / 8])
@@ -128,7 +150,7 @@ def test_quadratic_volumes_are_gregory_weights():
 
 
 def test_boundary_normals_rejects_bad_input():
-    X, _ = lattice.grid((0, 0), (1, 1), 0.5, "node")
+    X, _ = _grid((0, 0), (1, 1), 0.5, "node")
     with pytest.raises(ValueError, match="dx"):
         cs.boundary_normals(X, -1.0, lambda P: np.ones(len(P), bool))
     off = X.copy()
@@ -164,7 +186,7 @@ def test_force_patch_test(dim, base, jitter, A):
     assert info["normals_adjustment"] < PATCH_TOL or (jitter and base == "quadratic")
     mat = MAT2 if dim == 2 else MAT3
     assert _patch_residual(new, nr, fixed, A, mat) < PATCH_TOL
-    base_disc = csph.Discretisation(disc.X, Vi, disc.m, disc.h, disc.kernel, disc.indptr,
+    base_disc = tl.Discretisation(disc.X, Vi, disc.m, disc.h, disc.kernel, disc.indptr,
                                     disc.indices, disc.G, disc.GT, disc.L, disc.ok)
     assert _patch_residual(base_disc, nrm, fixed, A, mat) > BASE_MISS
 
@@ -183,10 +205,10 @@ def test_force_patch_test_dof_mask_on_symmetry_planes():
 
 def test_hpm_gradients_pass_the_patch_test():
     """HPM's weighted-least-squares gradients (004 eq. 4) through the same correction."""
-    ps = lattice.block((1.0, 0.75), 8, mode="node")
+    ps = _block((1.0, 0.75), 8, mode="node")
     fixed = np.zeros((ps.n, 2), bool)
     fixed[ps.sets["x0"]] = True
-    model = hpm.build(ps.X, ps.V, MAT2, ps.dx)
+    model = hpm.build_model(ps.X, ps.V, MAT2, ps.dx)
     disc = hpm.wls_discretisation(model)
     V, nrm = cs.boundary_normals(ps.X, ps.dx, cs.box_inside((0, 0), (1.0, 0.75), ps.dx))
     for basis in ("linear", "quadratic"):
@@ -217,7 +239,7 @@ def _uniaxial_exact_state(dim, eps):
 
 def _uniaxial_block(dim, n, base, h_ratio=1.3):
     size = (1.0,) * dim
-    ps = lattice.block(size, n, mode="node")
+    ps = _block(size, n, mode="node")
     disc = csph.discretise(ps.X, ps.V, MAT2.rho, ps.dx, h_ratio, correction=base)
     fixed = np.zeros((ps.n, dim), bool)
     for k, ax in enumerate("xyz"[:dim]):
@@ -239,7 +261,7 @@ def test_uniaxial_block_3d_elastic_patch_test(ppe):
     F, P = _uniaxial_exact_state(3, eps)
     x = ps.X @ F.T
     for D, consistent in ((new, True), (disc, False)):
-        f = csph.Body(D, MAT2).evaluate(x)
+        f = tl.Body(D, MAT2).evaluate(x)
         face = P[0, 0] * ps.dx ** 2  # the load on one face particle
         free_res = np.abs(f[~fixed]).max() / face
         reaction = -f[ps.sets["x1"], 0].sum() / P[0, 0] - 1
@@ -261,10 +283,10 @@ def test_uniaxial_reaction_exact(dim, n, base):
     P11 = _uniaxial_exact_state(dim, eps)[1][0, 0]
     errs = []
     for D in (new, disc):
-        body = csph.Body(D, MAT2)
+        body = tl.Body(D, MAT2)
         target = D.X.copy()
         target[ps.sets["x1"], 0] *= 1 + eps
-        x, conv, _ = csph.newton(body, D.X.copy(), csph.Constraints(fixed, np.zeros_like(target)),
+        x, conv, _ = newton(body, D.X.copy(), Constraints(fixed, np.zeros_like(target)),
                                  target, tol=1e-9, force_scale=MAT2.E * eps)
         errs.append(-body.evaluate(x)[ps.sets["x1"], 0].sum() / P11 - 1)
     assert abs(errs[0]) < 1e-8, errs   # Newton tolerance 1e-9 of E·ε and round-off of P
@@ -282,11 +304,11 @@ def test_deformation_gradient_exact_for_affine_and_quadratic_motions(base):
     fixed[X[:, 0] < 1e-9 * dx] = True
     new, _ = cs.consistent_discretisation(disc, Vi, nrm, cs.column_mask(fixed), basis=base)
     A = np.array([[1.1, 0.3], [-0.2, 0.9]])
-    F = csph.deformation_gradients(X @ A.T + [0.3, -0.1], new.indptr, new.indices, new.G)
+    F = tl.deformation_gradients(X @ A.T + [0.3, -0.1], new.indptr, new.indices, new.G)
     assert np.abs(F[:, :2, :2] - A).max() < 1e-11
     if base == "quadratic":
         x = X + 0.1 * np.c_[X[:, 0] ** 2 - X[:, 1] ** 2, 2 * X[:, 0] * X[:, 1]]
-        F = csph.deformation_gradients(x, new.indptr, new.indices, new.G)
+        F = tl.deformation_gradients(x, new.indptr, new.indices, new.G)
         Fex = np.empty((len(X), 2, 2))
         Fex[:, 0, 0] = Fex[:, 1, 1] = 1 + 0.2 * X[:, 0]
         Fex[:, 0, 1] = -0.2 * X[:, 1]
@@ -299,7 +321,7 @@ def test_momenta_conserved_and_tangent_is_symmetric_hessian(dim, mat, base):
     X, Vi, nrm, disc, dx, size = _box(dim, 8 if dim == 2 else 4, 0.2, base=base)
     new, _ = cs.consistent_discretisation(disc, Vi, nrm, np.ones(X.shape, bool), basis=base)
     rng = np.random.default_rng(7)
-    body = csph.Body(new, mat)
+    body = tl.Body(new, mat)
     x = new.X + 0.02 * dx * rng.standard_normal(X.shape) * 20
     f, A = body.evaluate(x, tangent=True)
     scale = np.abs(f).max()
@@ -322,7 +344,7 @@ def _ss_block(scene, n, base):
     X=a moved), consistent gradients; returns (log strain, Cauchy stress from the reaction)."""
     a = scene.size
     mat = scene.material
-    ps = lattice.block((a, a, a), n, mode="node")
+    ps = _block((a, a, a), n, mode="node")
     disc = csph.discretise(ps.X, ps.V, mat.rho, ps.dx, 1.3, correction=base)
     fixed = np.zeros((ps.n, 3), bool)
     for k, ax in enumerate("xyz"):
@@ -330,8 +352,8 @@ def _ss_block(scene, n, base):
     fixed[ps.sets["x1"], 0] = True
     V, nrm = cs.boundary_normals(ps.X, ps.dx, cs.box_inside((0,) * 3, (a,) * 3, ps.dx))
     disc, _ = cs.consistent_discretisation(disc, V, nrm, cs.column_mask(fixed), basis=base)
-    body = csph.Body(disc, mat)
-    cons = csph.Constraints(fixed, np.zeros((ps.n, 3)))
+    body = tl.Body(disc, mat)
+    cons = Constraints(fixed, np.zeros((ps.n, 3)))
     path = scene.strain_path()
     x = disc.X.copy()
     x1 = ps.sets["x1"]
@@ -339,7 +361,7 @@ def _ss_block(scene, n, base):
     for i, eps in enumerate(path):
         tg = x.copy()
         tg[x1, 0] = a * np.exp(eps)
-        x, conv, _ = csph.newton(body, x, cons, tg, tol=1e-10, force_scale=mat.E * a * a * 1e-3)
+        x, conv, _ = newton(body, x, cons, tg, tol=1e-10, force_scale=mat.E * a * a * 1e-3)
         assert conv
         body.commit()
         f = body.evaluate(x)
@@ -375,7 +397,7 @@ def test_consistent_gradients_rejects_bad_input():
 
 def test_excluded_nodes_carry_no_volume_and_the_total_is_kept():
     dx = 0.1
-    X, _ = lattice.grid((0.0, -0.3), (1.0, 0.3), dx, "node")
+    X, _ = _grid((0.0, -0.3), (1.0, 0.3), dx, "node")
     inside = cs.box_inside((0.0, -0.3), (1.0, 0.3), dx)
     corner = np.isclose(X[:, 0], 0.0) & np.isclose(np.abs(X[:, 1]), 0.3)
     for order in (1, 2):
@@ -400,7 +422,7 @@ def _beam_disc(X, V0, dx, rho, lo, hi, fixed, clamp_x=None, method="csph", mat=N
     if method == "csph":
         disc = csph.discretise(X, V0, rho, dx, h_ratio, correction="quadratic", body=label)
     else:
-        disc = hpm.wls_discretisation(hpm.build(X, V0, mat, dx, body=label))
+        disc = hpm.wls_discretisation(hpm.build_model(X, V0, mat, dx, body=label))
     ex = None
     if clamp_x is not None:
         ex = np.isclose(X[:, 0], clamp_x) & (np.isclose(X[:, 1], lo[1])
@@ -414,7 +436,7 @@ def _lowest_period(disc, mat, fixed, shift=0.0):
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    body = csph.Body(disc, mat)
+    body = tl.Body(disc, mat)
     _, A = body.evaluate(disc.X.copy(), tangent=True)
     K = body.tangent(A)
     free = ~fixed.ravel()
@@ -432,16 +454,12 @@ def test_plate_period_h10_against_fem():
     (measured +0.025 % here, −0.010 % at 20, −0.007 % at 40). The uncorrected quadratic gradients
     (−0.18 %) and the correction without the corner exclusion (−0.20 %) fail this gate."""
     fem = pytest.importorskip("fem_reference")
+    from sph import driver
     from workbench.scenes import Plate
+    from workbench.scenes.model import Modal
 
     scene = Plate()
-    mat = scene.material
-    ps = lattice.plate(scene, 10, mode="node")
-    fixed = np.zeros((ps.n, 2), bool)
-    fixed[ps.sets["fixed"]] = True
-    lo, hi = (0.0, -scene.H / 2), (scene.L, scene.H / 2)
-    disc = _beam_disc(ps.X, ps.V, ps.dx, mat.rho, lo, hi, fixed, clamp_x=0.0)
-    T = _lowest_period(disc, mat, fixed)
+    T = driver.solve("csph", scene, 10, drive=Modal(1))["period"]
     err = T / fem.reference(scene, "period") - 1
     assert abs(err) < 1e-3, err
 
@@ -456,7 +474,7 @@ def test_free_free_beam_period_converges_at_second_order():
     T = []
     for res in (5, 10, 20):
         dx = H / res
-        X, V0 = lattice.grid((0.0, -H / 2), (L, H / 2), dx, "node")
+        X, V0 = _grid((0.0, -H / 2), (L, H / 2), dx, "node")
         fixed = np.zeros(X.shape, bool)
         disc = _beam_disc(X, V0, dx, mat.rho, (0.0, -H / 2), (L, H / 2), fixed)
         T.append(_lowest_period(disc, mat, fixed, shift=-1.0))
@@ -477,7 +495,7 @@ def test_symmetry_plane_half_model_matches_full_model():
     T = {}
     for half in (False, True):
         Lx = L if half else 2 * L
-        X, V0 = lattice.grid((0.0, -H / 2), (Lx, H / 2), dx, "node")
+        X, V0 = _grid((0.0, -H / 2), (Lx, H / 2), dx, "node")
         fixed = np.zeros(X.shape, bool)
         fixed[np.isclose(X[:, 0], 0.0)] = True
         fixed[np.isclose(X[:, 0], Lx), 0] = True
@@ -491,25 +509,17 @@ def test_symmetry_plane_half_model_matches_full_model():
 
 
 @pytest.mark.parametrize("method,law,gate", [("csph", "svk", 2e-3), ("csph", "neo_hooke", 2e-3),
-                                             ("hpm", "svk", 2e-3)])
+                                             ("hpm_vc", "svk", 2e-3)])
 def test_cantilever_tip_h10_against_fem(method, law, gate):
     """Static tip-loaded cantilever (004 E) at H/Δx = 10, all four loads (up to P L²/(E I) = 5),
-    through csph.solve_cantilever with the corrected gradients: within 0.2 % of the converged FEM
-    (measured csph +0.10 … +0.05 %, hpm with the quadratic basis +0.03 %; the uncorrected quadratic
-    CSPH is −0.23 … +0.35 %, HPM's own gradients +3.9 %)."""
+    through the driver with the corrected gradients (csph; hpm_vc: HPM's gradient with the
+    quadratic basis): within 0.2 % of the converged FEM (measured csph +0.10 … +0.05 %, hpm_vc
+    +0.03 %; the uncorrected quadratic CSPH is −0.23 … +0.35 %, HPM's own gradients +3.9 %)."""
     fem = pytest.importorskip("fem_reference")
+    from sph import driver
     from workbench.scenes import Cantilever
 
     scene = Cantilever(law=law)
-    mat = scene.material
-
-    def disc(ps):
-        fixed = np.zeros((ps.n, 2), bool)
-        fixed[ps.sets["fixed"]] = True
-        return _beam_disc(ps.X, ps.V, ps.dx, mat.rho, (0.0, -scene.H / 2),
-                          (scene.L, scene.H / 2), fixed, clamp_x=0.0, method=method, mat=mat)
-
-    r = csph.solve_cantilever(scene, 10, lattice_mode="node", discretisation=disc,
-                              solver_name=method)
+    r = driver.solve(method, scene, 10)
     err = r["tip_deflection"] / fem.reference(scene, "tip_deflection") - 1
     assert np.abs(err).max() < gate, err
