@@ -34,8 +34,11 @@ particle methods' one driver :func:`sph.driver.solve`, with the same result keys
    Newmark's average-acceleration rule (:mod:`.dynamic`, implicit). Its time step does not follow
    the CFL factor ``dt_factor`` of the particle methods: it is T₁/``steps_per_period`` (default
    100) with T₁ the lowest modal period, so that the period elongation of the trapezoidal rule,
-   (ω₁Δt)²/12, is 0.033 % (at least 20 steps over the run; when the stiffness is singular — a body
-   without supports — t_end/max(n_out, 20)). Mass-proportional damping as in the drive.
+   (ω₁Δt)²/12, is 0.033 %; n = ⌈t_end/Δt⌉ steps, as the particle driver counts them (the run may
+   end up to one step past t_end), at least 20 (then Δt = t_end/20). A body free to move rigidly
+   (singular stiffness: ω₁² below :data:`RIGID` times tr K₀/tr M) takes T₁ of its lowest
+   deforming mode; when none is found, Δt = t_end/max(n_out, 20). Mass-proportional damping as in
+   the drive.
    Observables are recorded about ``n_out`` times, the Displacement histories behind
    :class:`Period` observables at every step.
 5. **observables** — :class:`Displacement` (probe, or the mean over the set's nodes weighted by
@@ -94,6 +97,10 @@ MIN_STEPS = 20
 """Fewest Newmark steps over an explicit drive's end time."""
 N_MODES_EXPLICIT = 3
 """Modal periods computed before a time run (the lowest sets the step; reported as ``omega``)."""
+RIGID = 1e-12
+"""A mode with ω² below RIGID · tr K₀/tr M is a rigid-body mode. tr K₀/tr M ~ c²/h² is about the
+largest ω² of the mesh; a zero eigenvalue comes out at ~1e-17 of it (round-off), the lowest
+bending mode of a plate of aspect 10 with 100 elements across at ~1e-8 ((H h/L²)²)."""
 
 ELEMENTS = {"q9": (2, 2), "quad9": (2, 2), "q4": (2, 1), "quad4": (2, 1),
             "hex27": (3, 2), "hex8": (3, 1)}
@@ -608,23 +615,34 @@ def _modes(fm: FemModel, k: int):
     return omega
 
 
-def _deforming_period(fm: FemModel) -> float:
-    """The lowest period of the deforming modes of a body whose stiffness is singular (rigid
-    modes free): shift-invert about a small negative shift −s (K + s M is regular), the rigid
-    modes (ω² below 1e-8 of the mean K/M diagonal ratio) skipped; NaN if none is found."""
-    import scipy.sparse.linalg as spla
-
+def _operators(fm: FemModel):
+    """The tangent K₀ about the reference state and the mass, on the free DOFs (CSC)."""
     problem, disc = fm.problem, fm.disc
     st = problem.initial_state()
     K = problem.tangent(problem.evaluate(st.u, st, tangent=True)).tocsc()
-    Mf = problem.mass()[disc.free][:, disc.free].tocsc()
+    return K, problem.mass()[disc.free][:, disc.free].tocsc()
+
+
+def _stiffness_scale(fm: FemModel) -> float:
+    """tr K₀ / tr M on the free DOFs, 1/s²: about the largest ω² of the mesh."""
+    K, Mf = _operators(fm)
+    return float(K.diagonal().sum() / Mf.diagonal().sum())
+
+
+def _deforming_period(fm: FemModel) -> float:
+    """The lowest period of the deforming modes of a body free to move rigidly (singular K₀):
+    shift-invert about a small negative shift −s (K₀ + s M is regular), the rigid modes (ω² below
+    :data:`RIGID` times tr K₀/tr M) skipped; NaN if none is found."""
+    import scipy.sparse.linalg as spla
+
+    K, Mf = _operators(fm)
     scale = float(K.diagonal().sum() / Mf.diagonal().sum())
-    k = min(2 * fm.d * (fm.d + 1) // 2 + 3, K.shape[0] - 2)
+    k = min(fm.d * (fm.d + 1) // 2 + N_MODES_EXPLICIT, K.shape[0] - 2)
     try:
         lam = spla.eigsh(K, k=k, M=Mf, sigma=-1e-6 * scale, which="LM", return_eigenvectors=False)
     except Exception:
         return math.nan
-    lam = np.sort(lam[lam > 1e-8 * scale])
+    lam = np.sort(lam[lam > RIGID * scale])
     return float(2 * np.pi / np.sqrt(lam[0])) if len(lam) else math.nan
 
 
@@ -671,10 +689,10 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
     try:
         with np.errstate(invalid="ignore"):
             omega = _modes(fm, N_MODES_EXPLICIT)
+        if not (np.isfinite(omega[0]) and omega[0] ** 2 > RIGID * _stiffness_scale(fm)):
+            raise ValueError("a rigid mode: the stiffness is singular")
         T1 = float(2 * np.pi / omega[0])
-        if not (math.isfinite(T1) and T1 > 0):
-            raise ValueError("singular stiffness")
-    except Exception:  # no support: the lowest period of the deforming modes
+    except Exception:  # a body free to move rigidly: the lowest period of the deforming modes
         omega = np.full(N_MODES_EXPLICIT, np.nan)
         T1 = _deforming_period(fm)
     if math.isfinite(T1):
