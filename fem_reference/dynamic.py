@@ -35,8 +35,9 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     the committed :class:`~fem_reference.static.State`.
     The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) − c M v₀ on the free DOFs
     (``damping`` c, 1/s: mass-proportional damping, module docstring).
-    Returns dict(time, observed, kinetic_energy, strain_energy (stored energy, J; NaN where the
-    material library has none), status, newton_iterations, deleted (elements, in order)).
+    Returns dict(time, observed, kinetic_energy, strain_energy (stored energy of the live
+    points, J: the library's closed forms), status, newton_iterations, deleted (elements, in
+    order)).
     """
     disc = problem.disc
     M_full = problem.mass()

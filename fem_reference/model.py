@@ -277,7 +277,8 @@ def discretise(model: M.Model, resolution: int, element=None, fbar=None,
     mat_id = np.array([rows.get(r.name, -1) for r in model.regions], np.int64)[region]
     X = np.ascontiguousarray(disc.basis.doflocs[:, ::d])
     n_nodes = X.shape[1]
-    vol = np.bincount(disc.sdofs.ravel(), weights=np.einsum("eq,eqa->ea", disc.dV0, disc.Nq).ravel(),
+    vol = np.bincount(disc.sdofs.ravel(),
+                      weights=np.einsum("eq,eqa->ea", disc.dV0, disc.Nq).ravel(),
                       minlength=n_nodes)
     fm = FemModel(model, h, disc, None, Constraints(disc), Loads(disc), region, mat_id, table, X,
                   vol, element=ename)
@@ -428,8 +429,8 @@ def _loads(fm: FemModel) -> None:
         if isinstance(ld, (M.Traction, M.Pressure)):
             fac = fm.facets[ld.set]
             if not len(fac):
-                raise SceneError(f"{type(ld).__name__} on set '{ld.set}': the set holds no boundary "
-                                 f"facet at element size {fm.h:g} m")
+                raise SceneError(f"{type(ld).__name__} on set '{ld.set}': the set holds no "
+                                 f"boundary facet at element size {fm.h:g} m")
             if isinstance(ld, M.Traction):
                 loads.vector(disc.traction_load(fac, np.asarray(ld.traction, float)), s)
             else:
@@ -587,7 +588,8 @@ def _static(fm: FemModel, t0: float, options: dict, series) -> dict:
             series(lam, state.u)
 
     solver = TangentSolver()
-    kw = {k: options[k] for k in ("max_increment", "min_increment", "rtol", "maxit") if k in options}
+    kw = {k: options[k] for k in ("max_increment", "min_increment", "rtol", "maxit")
+          if k in options}
     try:
         setup = time.perf_counter() - t0
         recs, _ = load_path(fm.problem, path, callback=measure, solver=solver, **kw)
@@ -753,7 +755,8 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
     if run is not None:
         ke, se = run["kinetic_energy"][idx], run["strain_energy"][idx]
         out.update(kinetic_energy=ke, strain_energy=se,
-                   energy_history=ke + se - np.asarray(w_rec), newton_iterations=run["newton_iterations"],
+                   energy_history=ke + se - np.asarray(w_rec),
+                   newton_iterations=run["newton_iterations"],
                    deleted=run["deleted"])
         out["time"] = run["time"][idx]
     for j, p in enumerate(periods):
@@ -778,7 +781,8 @@ def model_at(scene, resolution: int):
 
 
 def build(scene, resolution: int, drive=None, element=None, fbar=None, deletion=False) -> FemModel:
-    """:func:`discretise` of ``scene.model(h)`` at ``resolution`` (``drive`` replaces the model's)."""
+    """:func:`discretise` of ``scene.model(h)`` at ``resolution`` (``drive`` replaces the
+    model's)."""
     model = model_at(scene, resolution)
     if drive is not None:
         model = dataclasses.replace(model, drive=drive)

@@ -236,7 +236,7 @@ class Problem:
 
     def stored_energy(self, state: State) -> float:
         """∫ ψ dV over the live points, J (J/m in 2-D) (:func:`~.constitutive.
-        stored_energy_density`; NaN where the library has no stored energy for a law)."""
+        stored_energy_density`, the library's closed forms)."""
         disc = self.disc
         live = self.live_points(state)
         F = embed(disc.displacement_gradient(state.u)[live], state.F33[live])
