@@ -24,10 +24,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .mortar import N_HISTORY as N_HISTORY_MORTAR, mortar_energy, mortar_point
 from .elastic import elastic_energy, mooney_rivlin_point, neo_hooke_point, svk_point  # noqa: F401
 from .j2 import j2_energy, j2_point  # noqa: F401
 from .layout import N_HISTORY_J2, N_PARAMS
+from .mortar import N_HISTORY as N_HISTORY_MORTAR
+from .mortar import mortar_energy, mortar_point
 from .tensor import (INVERTED, JIT, JIT_PARALLEL, LOG_SERIES_MAX, NOT_CONVERGED,  # noqa: F401
                      OK, UNKNOWN_LAW, _copy, _fail, eig_sym3_closed, eigh3, exp_sym, log_spd)
 
