@@ -50,6 +50,11 @@ GATED = ("csph", "hpm", "hpm_vc")
 # 0.19 %, csph_bl by 2.7 %, hpm by 1.8 %.
 TOL_PERIOD_CONSISTENT = 1e-3
 CONSISTENT = ("csph", "hpm_vc")
+# csph at H/Δx = 40 (full ladder): issue 10's target 0.05 % (second order predicts 0.006 % from the
+# 0.1 % bound at 10; the finite amplitude's ~0.015 % shift against the modal reference remains),
+# and the observed order over 5 … 40 at least 1.5 (second order expected; nodal integration ~1).
+TOL_PERIOD_FINE = 5e-4
+MIN_ORDER = 1.5
 # Method options of this study: classic SPH on the cell lattice (Gray et al.'s arrangement; the
 # free surfaces half a spacing outside the outermost particles), the others on the node lattice.
 OPTIONS = {"sph": {"lattice": "cell"}}  # classic SPH is the baseline: it is expected to fail, not gated
@@ -236,6 +241,18 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         d = float(ds.energy_drift.sel(solver=s, resolution=10))
         g.append(Gate.at_most(f"plate {s} at H/dx = 10: |energy drift| over the run, no damping",
                               abs(d), TOL_DRIFT, "symplectic scheme: bounded energy error, 0.1 %"))
+    if "csph" in ds.solver.values:
+        v = ds.period.sel(solver="csph").values
+        res = ds.resolution.values
+        if 40 in res and np.isfinite(v[list(res).index(40)]):
+            g.append(Gate.at_most("plate csph at H/dx = 40: period vs FEM modal period",
+                                  abs(v[list(res).index(40)] - ref) / ref, TOL_PERIOD_FINE,
+                                  "issue 10's target; second order predicts 0.006 %"))
+        keep = np.isfinite(v)
+        if keep.sum() >= 3:
+            g.append(Gate.at_least("plate csph: observed order of the period error",
+                                   observed_order(1.0 / res[keep], v[keep] - ref), MIN_ORDER,
+                                   "second-order method; nodal integration converges at ~1"))
     return g
 
 

@@ -17,7 +17,7 @@ def bench_ds(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv(bench.REPEATS_ENV, "1")  # one run per cell is enough for the schema
         rc = cli.main(["bench", "--particles", "2000", "--threads", "1", "--solver", "csph",
-                       "--solver", "hpm", "--out", str(out)])
+                       "--out", str(out)])
     assert rc == 0
     assert (out / "bench.png").stat().st_size > 0
     return results.read(out / "bench.nc")
@@ -25,7 +25,7 @@ def bench_ds(tmp_path_factory):
 
 def test_schema_and_units(bench_ds):
     ds = bench_ds
-    assert list(ds.solver.values) == ["csph", "hpm"]
+    assert list(ds.solver.values) == ["csph"]
     assert list(ds.particles.values) == [2000] and list(ds.threads.values) == [1]
     expect = {"particle_steps_per_second": (("solver", "particles", "threads"), "1/s"),
               "status": (("solver", "particles", "threads"), "-"),
