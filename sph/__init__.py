@@ -21,8 +21,15 @@ _jitcache.guard(_here / "__pycache__",
                 _jitcache.sources_of(_here, Path(_materials.__file__).parent))
 
 METHODS = {
-    "csph": "sph.csph",
-    "hpm": "sph.hpm",
-    "sph": "sph.classic",
+    "csph": ("sph.csph", {}),
+    "csph_quad": ("sph.csph", {"correction": "quadratic", "integration": "nodal"}),
+    "csph_bl": ("sph.csph", {"correction": "linear", "integration": "nodal"}),
+    "hpm": ("sph.hpm", {}),
+    "hpm_vc": ("sph.csph", {"gradient": "wls"}),
+    "sph": ("sph.classic", {}),
 }
-"""Particle method name (the ``solver`` of the datasets) -> module."""
+"""Particle method name (the ``solver`` of the datasets) -> (module, default options). ``csph`` is
+the integration-consistent corrected SPH (quadratic correction), ``csph_quad`` the same gradient
+with nodal integration, ``csph_bl`` paper 000's CSPH as printed (Bonet–Lok correction, nodal
+integration); ``hpm`` paper 004's method, ``hpm_vc`` its gradient with the consistent integration
+(quadratic basis); ``sph`` classic SPH (paper 003)."""

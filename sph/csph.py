@@ -14,9 +14,22 @@ f = −∂Π/∂x of the stored energy Π = Σ_a V_a ψ(F_a) (eq. 7–24): linea
 conserved to round-off, the tangent is symmetric. Explicit dynamics in one fused velocity-Verlet
 loop; statics by Newton (:mod:`sph.static`); optional hourglass control (:mod:`sph.hourglass`).
 
+Integration (``integration``): ``"consistent"`` (the default) replaces G by the smallest change
+that makes the force patch test exact (:mod:`sph.consistency`: uniform stretch and shear are
+discrete equilibria with free faces, symmetry planes, loaded faces and clamps, at any resolution,
+while F stays exact for affine — and with the quadratic correction quadratic — motions and the
+force stays −∂Π/∂x), with volumes exact for quadratics and a clamp modelled as a face of the body
+(the held particles behind it detached, the clamped corners carrying no volume); ``"nodal"`` is
+plain nodal integration, the paper's.
+
 Options of :func:`build`: ``h_ratio`` (h/Δx, default 1.1), ``kernel`` ('cubic_spline' or
 'wendland_c2'), ``correction`` ('quadratic', the default; 'linear' = the paper's Bonet–Lok
-correction), ``hourglass`` (α ≥ 0, 0 = off).
+correction), ``integration`` ('consistent', the default; 'nodal'), ``hourglass`` (α ≥ 0, 0 = off).
+``gradient`` ('kernel', the default; 'wls': HPM's weighted-least-squares gradient, 004 eq. 4,
+with ``re_ratio`` — HPM is CSPH with that gradient, so its integration-consistent form is this
+body). The registry (:data:`sph.METHODS`) names the variants: ``csph`` (quadratic, consistent),
+``csph_quad`` (quadratic, nodal), ``csph_bl`` (Bonet–Lok, nodal: paper 000 as printed) and
+``hpm_vc`` (HPM's gradient, consistent integration with the quadratic basis).
 """
 from __future__ import annotations
 
@@ -31,7 +44,13 @@ from . import total_lagrangian as tl
 NAME = "csph"
 OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland_c2'",
                correction="'quadratic' (default) | 'linear' (the paper's Bonet–Lok)",
-               hourglass="hourglass-control coefficient α ≥ 0 (default 0)")
+               integration="'consistent' (default) | 'nodal' (the paper's)",
+               hourglass="hourglass-control coefficient α ≥ 0 (default 0)",
+               gradient="'kernel' (default: the corrected kernel gradient) | 'wls' (HPM's "
+                        "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
+               re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)")
+INTEGRATIONS = ("consistent", "nodal")
+GRADIENTS = ("kernel", "wls")
 
 DEFAULT_CORRECTION = "quadratic"
 """Gradient correction used unless ``correction=`` is given. The paper's Bonet–Lok correction
@@ -53,7 +72,9 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
 
     ``correction``: ``"linear"`` — Bonet–Lok, eq. 31 and 34 (the paper's CSPH); ``"quadratic"`` —
     :func:`sph.correction.quadratic_gradients` (exact for quadratic fields; the same force and
-    conservation)."""
+    conservation). Where a particle has too few neighbours for the quadratic fit (a block of two
+    particles per edge), the whole body falls back to the linear correction (``disc.correction``
+    says which was used)."""
     if correction not in CORRECTIONS:
         raise ValueError(f"correction: {correction!r} is not one of {', '.join(map(repr, CORRECTIONS))}")
     if not (0.5 <= h_ratio <= 4.0):
@@ -68,12 +89,69 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
     if body is not None:
         indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
     L, ok = correction_matrices(X, V, indptr, indices, h, kind)
+    if correction == "quadratic":
+        G, ok_q = quadratic_gradients(X, V, indptr, indices, h, kind)
+        if ok_q.all():
+            ok = ok_q
+        else:
+            correction = "linear"
     if correction == "linear":
         G = corrected_gradients(X, V, indptr, indices, h, kind, L)
-    else:
-        G, ok = quadratic_gradients(X, V, indptr, indices, h, kind)
     GT = reverse_gradients(indptr, indices, G)
-    return tl.Discretisation(X, V, mass, h, kernel, indptr, indices, G, GT, L, ok)
+    return tl.Discretisation(X, V, mass, h, kernel, indptr, indices, G, GT, L, ok, correction)
+
+
+def wls(ps, re_ratio: float | None = None, body=None) -> tl.Discretisation:
+    """HPM's weighted-least-squares gradient (004 eq. 4–6) of the particles ``ps`` as a
+    gradient-form discretisation (:func:`sph.hpm.wls_discretisation`); ``body`` as in
+    :func:`discretise`."""
+    from . import hpm
+
+    model = hpm.build_model(ps.X, ps.V, ps.table[0], ps.dx,
+                            hpm.RE_RATIO if re_ratio is None else re_ratio, body=body)
+    disc = hpm.wls_discretisation(model)
+    disc.m = np.ascontiguousarray(ps.m, dtype=np.float64)
+    return disc
+
+
+def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
+               correction: str = DEFAULT_CORRECTION, weights: str = "uniform",
+               gradient: str = "kernel", re_ratio: float | None = None):
+    """The integration-consistent discretisation of the particles ``ps``
+    (:class:`sph.particles.Particles` on a lattice): neighbours only within the body's integration
+    domain (held particles outside it — a clamp block behind its face — are detached), volumes
+    exact for quadratics (linear with the Bonet–Lok base) with the clamped corners excluded, and
+    the gradients of :func:`discretise` corrected by
+    :func:`sph.consistency.consistent_discretisation` on every free DOF. Returns
+    (Discretisation, info of the correction)."""
+    from .consistency import boundary_normals, column_mask, consistent_discretisation
+
+    if ps.origin is None or ps.domain_shape is None:
+        raise ValueError("integration: 'consistent' needs lattice particles (a region on the model's "
+                         "lattice); allowed for other arrangements: 'nodal'")
+    d = ps.dim
+    labels = ps.body * 2 + (~ps.domain).astype(np.int64)
+    labels = labels if labels.max() > 0 else None
+    if gradient == "wls":
+        disc = wls(ps, re_ratio, labels)
+        disc.correction = correction
+    else:
+        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=labels)
+    inside = ps.domain_shape
+
+    def predicate(q):
+        return inside.contains(q, 0.0)
+
+    _, n1 = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin, order=1)
+    edge = np.count_nonzero(np.abs(n1) > 1e-9 * ps.dx ** (d - 1), axis=1) >= 2
+    corners = ps.clamped & ps.domain & edge
+    V_int, n_int = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin,
+                                    order=2 if disc.correction == "quadratic" else 1,
+                                    exclude=corners if corners.any() else None)
+    new, info = consistent_discretisation(disc, V_int, n_int, column_mask(ps.fixed, "dof"),
+                                          basis=disc.correction, weights=weights)
+    new.correction = disc.correction
+    return new, info
 
 
 class CSPH(ParticleBody):
@@ -82,14 +160,27 @@ class CSPH(ParticleBody):
     name = NAME
 
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
-                 correction: str = DEFAULT_CORRECTION, hourglass: float = 0.0):
+                 correction: str = DEFAULT_CORRECTION, integration: str = "consistent",
+                 hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None):
         super().__init__(particles)
+        if gradient not in GRADIENTS:
+            raise ValueError(f"gradient: {gradient!r} is not one of {', '.join(map(repr, GRADIENTS))}")
         if particles.plane == "stress":
             raise ValueError("plane: 'stress' is not modelled by csph (F33 = 1: plane strain); "
                              "allowed: 'strain' or a 3-D model")
+        if integration not in INTEGRATIONS:
+            raise ValueError(f"integration: {integration!r} is not one of {', '.join(map(repr, INTEGRATIONS))}")
         ps = particles
-        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction,
-                          body=ps.body if len(ps.body_names) > 1 else None)
+        self.integration = integration
+        body = ps.body if len(ps.body_names) > 1 else None
+        if integration == "consistent":
+            disc, self.consistency = consistent(ps, h_ratio, kernel, correction,
+                                                gradient=gradient, re_ratio=re_ratio)
+            self.normals = self.consistency["normals"]
+        elif gradient == "wls":
+            disc = wls(ps, re_ratio, body)
+        else:
+            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=body)
         self.disc = disc
         self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
         self.m = disc.m

@@ -68,9 +68,15 @@ def threads_for(n_particles: int):
 
 def method_module(name: str):
     """The module of the particle method ``name`` (:data:`sph.METHODS`)."""
+    return method_entry(name)[0]
+
+
+def method_entry(name: str):
+    """(module, default options) of the particle method ``name`` (:data:`sph.METHODS`)."""
     if name not in METHODS:
         raise ValueError(f"solver: {name!r} is not a particle method; allowed: {', '.join(METHODS)}")
-    return importlib.import_module(METHODS[name])
+    mod, defaults = METHODS[name]
+    return importlib.import_module(mod), dict(defaults)
 
 
 def model_at(scene, resolution: int):
@@ -95,7 +101,8 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
     import dataclasses
 
     t0 = time.perf_counter()
-    mod = method_module(method)
+    mod, defaults = method_entry(method)
+    options = {**defaults, **options}
     model, _ = model_at(scene, resolution)
     if drive is not None:
         model = dataclasses.replace(model, drive=drive)
@@ -126,19 +133,8 @@ class Run:
         self.model = model
         self.ps = ps
         self.body = body
-        N, d = ps.n, ps.dim
-        fixed = np.zeros((N, d), bool)
-        fixed[ps.held] = True
-        self.prescribed = []
-        for c in model.constraints:
-            idx = ps.sets[c.set]
-            if isinstance(c, M.Clamp):
-                fixed[idx] = True
-            else:
-                fixed[idx, c.axis] = True
-                if isinstance(c, M.Prescribed):
-                    self.prescribed.append(c)
-        self.fixed = fixed
+        self.prescribed = [c for c in model.constraints if isinstance(c, M.Prescribed)]
+        self.fixed = ps.fixed
         self.varying = bool(self.prescribed) or any(
             not isinstance(getattr(ld, "scale", 1.0), (int, float)) and
             not (isinstance(ld.scale, M.Table) and len(ld.scale.times) == 1)
@@ -148,6 +144,7 @@ class Run:
     def dead_forces(self, at: float) -> np.ndarray:
         """f_ext (N, d), N, of the dead loads at the load parameter / time ``at``."""
         ps = self.ps
+        normals = self.body.normals if self.body.normals is not None else ps.normals
         f = np.zeros((ps.n, ps.dim))
         for ld in self.model.loads:
             if isinstance(ld, M.InitialVelocity):
@@ -155,10 +152,10 @@ class Run:
             s = float(M.as_function(ld.scale)(at))
             if isinstance(ld, M.Traction):
                 idx = ps.sets[ld.set]
-                f[idx] += s * np.outer(ps.surface_area(ld.set), np.asarray(ld.traction, float))
+                f[idx] += s * np.outer(ps.surface_area(ld.set, normals), np.asarray(ld.traction, float))
             elif isinstance(ld, M.Pressure):
                 idx = ps.sets[ld.set]
-                f[idx] -= s * ld.pressure * ps.normals[idx]
+                f[idx] -= s * ld.pressure * normals[idx]
             elif isinstance(ld, M.PointLoad):
                 idx, w = ps.probes[ld.set] if ld.set in ps.probes else (
                     ps.sets[ld.set], np.full(len(ps.sets[ld.set]), 1.0 / len(ps.sets[ld.set])))

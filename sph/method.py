@@ -30,6 +30,9 @@ class ParticleBody:
     """Base class: the state arrays and the parts every method shares."""
 
     name = "method"
+    normals = None
+    """The boundary area vectors (N, d) the method's surface loads must use (an integration-
+    consistent method: those it enforced), or None: the particles' own."""
 
     def __init__(self, particles):
         self.particles = particles

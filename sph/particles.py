@@ -9,11 +9,11 @@ share one lattice over the bounding box of their union, with a node at its lower
 
 A particle is kept when it lies in the union of the lattice regions (closed, to 1e-6 Δx). Its
 volume and its **boundary area vector** n_c = ∮ N dΓ over its share of the body surface come from a
-sub-grid of half spacing: each particle owns the cube of side Δx around it (its dual cell on the
-node lattice, its cell on the cell lattice), cut into 2^d sub-cubes; a sub-cube belongs to the body
-when its centre does; V_c is (Δx/2)^d times the number of the particle's sub-cubes in the body, and
-n_c sums the outward normals times the area (Δx/2)^(d−1) of the faces between its body sub-cubes
-and sub-cubes outside the body. For unions of lattice-aligned boxes this is exact: the trapezoid
+sub-grid of half spacing (:func:`sph.consistency.boundary_normals`): each particle owns the cube of
+side Δx around it (its dual cell on the node lattice, its cell on the cell lattice), cut into 2^d
+sub-cubes; a sub-cube belongs to the body when its centre does; V_c is (Δx/2)^d times the number
+of the particle's sub-cubes in the body, and n_c sums the outward normals times the area
+(Δx/2)^(d−1) of the faces between its body sub-cubes and sub-cubes outside the body. For unions of lattice-aligned boxes this is exact: the trapezoid
 rule's volumes and face areas (node lattice), Σ V = the body's volume and Σ_c X_c ⊗ n_c = Σ V I (the
 discrete divergence theorem the integration-consistent correction needs). Other shapes get a
 staircase of half spacing.
@@ -43,6 +43,8 @@ from workbench.scenes.model import Model
 from workbench.scenes.params import SceneError
 from workbench.scenes.shapes import Cylinder, Plane, Point, Union
 
+from .consistency import boundary_normals
+
 TOL = 1e-6
 """Geometric tolerance over the spacing: points within TOL·Δx of a shape's boundary are in it."""
 
@@ -55,7 +57,11 @@ class Particles:
     spacing, m; mat_id (N,) rows of ``table``; region (N,) and body (N,) indices into
     ``region_names`` and ``body_names``; held (N,) particles of held regions; normals (N, d)
     boundary area vectors, m^(d−1); sets: name → particle indices; probes: name → (indices,
-    weights)."""
+    weights); fixed (N, d) the DOFs the constraints hold or move (held particles, clamps, rollers,
+    prescribed motion); clamped (N,) the particles held in every DOF at rest (held regions and
+    clamps); domain (N,) the particles in the closed union of the non-held regions (the body's
+    integration domain: a clamp is a face of it), ``domain_shape`` that union and ``origin`` the
+    lattice's anchor (None off the lattice)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -73,6 +79,11 @@ class Particles:
     sets: dict = field(default_factory=dict)
     probes: dict = field(default_factory=dict)
     set_normal_axis: dict = field(default_factory=dict)
+    fixed: np.ndarray | None = None
+    clamped: np.ndarray | None = None
+    domain: np.ndarray | None = None
+    domain_shape: object = None
+    origin: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -98,12 +109,13 @@ class Particles:
         ids = [self.region_names.index(r) for r in names]
         return np.isin(self.region, ids)
 
-    def surface_area(self, set_name: str) -> np.ndarray:
+    def surface_area(self, set_name: str, normals=None) -> np.ndarray:
         """Each particle's share (m^(d−1)) of the surface the set lies on: the component of its
-        boundary area vector along the plane normal for a :class:`Plane` set, |n_c| otherwise."""
+        boundary area vector (``normals``, default the particles' own) along the plane normal for
+        a :class:`Plane` set, |n_c| otherwise."""
         idx = self.sets[set_name]
         axis = self.set_normal_axis.get(set_name)
-        n = self.normals[idx]
+        n = (self.normals if normals is None else normals)[idx]
         return np.abs(n[:, axis]) if axis is not None else np.linalg.norm(n, axis=1)
 
 
@@ -129,29 +141,6 @@ def lattice_points(lo, hi, dx: float, mode: str) -> tuple[np.ndarray, np.ndarray
     kmesh = np.meshgrid(*ids, indexing="ij")
     return (np.stack([g.ravel() for g in mesh], axis=1),
             np.stack([g.ravel() for g in kmesh], axis=1))
-
-
-def volumes_and_normals(X: np.ndarray, dx: float, inside) -> tuple[np.ndarray, np.ndarray]:
-    """Volumes V (N,) and boundary area vectors n (N, d) of the particles X (N, d), each owning
-    the cube of side dx around it, by the half-spacing sub-grid of the module docstring.
-    ``inside(points) -> bool`` is the body."""
-    N, d = X.shape
-    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=d)))  # (2^d, d)
-    q = dx / 4.0
-    V = np.zeros(N)
-    n = np.zeros((N, d))
-    face = (dx / 2.0) ** (d - 1)
-    for s in signs:
-        c = X + s * q  # sub-cube centres
-        ins = inside(c)
-        V += ins
-        for k in range(d):
-            for side in (-1.0, 1.0):
-                nb = c.copy()
-                nb[:, k] += side * 2.0 * q
-                exposed = ins & ~inside(nb)
-                n[exposed, k] += side * face
-    return V * (dx / 2.0) ** d, n
 
 
 def concentric_particles(cyl: Cylinder, dx: float):
@@ -192,7 +181,7 @@ def box(lo, hi, dx: float, mode: str = "cell") -> tuple[np.ndarray, np.ndarray]:
     b = Box(tuple(lo), tuple(hi))
     X, _ = lattice_points(np.asarray(lo, float), np.asarray(hi, float), dx, mode)
     X = np.ascontiguousarray(X[b.contains(X, TOL * dx)])
-    V, _ = volumes_and_normals(X, dx, lambda q: b.contains(q, 0.0))
+    V, _ = boundary_normals(X, dx, lambda q: b.contains(q, 0.0), origin=np.asarray(lo, float))
     return X, V
 
 
@@ -281,7 +270,7 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
         X, K = P[keep], K[keep]
         if len(X) == 0:
             raise SceneError(f"regions: no lattice point at spacing {dx:g} m lies in the body")
-        V, nrm = volumes_and_normals(X, dx, lambda q: body.contains(q, 0.0))
+        V, nrm = boundary_normals(X, dx, lambda q: body.contains(q, 0.0), origin=lo)
         reg = _assign_regions(model, lat, X, tol)
         Xs.append(X); Vs.append(V); Ns.append(nrm); regs.append(reg)
         kmax = K.max(axis=0)
@@ -325,7 +314,34 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
         if isinstance(s.shape, Plane):
             ps.set_normal_axis[s.name] = s.shape.axis
     del n_lat
+    _constraints(model, ps, lat, tol, lo)
     return ps
+
+
+def _constraints(model: Model, ps: Particles, lat, tol: float, lo) -> None:
+    """``fixed``, ``clamped``, ``domain``, ``domain_shape`` and ``origin`` of the particles."""
+    from workbench.scenes import model as M
+
+    fixed = np.zeros((ps.n, ps.dim), bool)
+    fixed[ps.held] = True
+    clamped = ps.held.copy()
+    for c in model.constraints:
+        idx = ps.sets[c.set]
+        if isinstance(c, M.Clamp):
+            fixed[idx] = True
+            clamped[idx] = True
+        else:
+            fixed[idx, c.axis] = True
+    free_regions = [r for r in lat if not r.held]
+    domain = np.zeros(ps.n, bool)
+    if free_regions:
+        shape = Union(tuple(r.shape for r in free_regions))
+        domain = shape.contains(ps.X, tol)
+        ps.domain_shape = shape
+    conc = [model.regions.index(r) for r in model.regions if r.arrangement == "concentric" and not r.held]
+    domain |= np.isin(ps.region, conc)
+    ps.fixed, ps.clamped, ps.domain = fixed, clamped, domain
+    ps.origin = None if lo is None else np.asarray(lo, dtype=float)
 
 
 def _assign_regions(model: Model, lat, X, tol) -> np.ndarray:

@@ -71,7 +71,7 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             Kfp = K[free][:, fixed]
             rhs = rhs - Kfp @ dxp
         try:
-            du = spla.spsolve(Kff.tocsc(), rhs)
+            du = solve_linear(Kff, rhs)
         except Exception:  # singular tangent
             return x, False, it
         if not np.all(np.isfinite(du)):
@@ -83,6 +83,20 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
         last_step = float(np.abs(du).max()) if du.size else 0.0
         x = x + step.reshape(x.shape)
     return x, False, max_iter
+
+
+DENSE_BELOW = 3000
+"""Free DOFs under which the Newton system is solved dense (LAPACK): the particle tangent couples
+second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
+
+
+def solve_linear(K, rhs) -> np.ndarray:
+    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, SuperLU above."""
+    import scipy.linalg as sla
+
+    if K.shape[0] < DENSE_BELOW:
+        return sla.solve(K.toarray(), rhs, check_finite=False)
+    return spla.spsolve(K.tocsc(), rhs)
 
 
 def spacing(body: Body) -> float:
@@ -98,12 +112,12 @@ def dynamic_relaxation(body: Body, x: np.ndarray, cons: Constraints, x_target_fi
     """Equilibrium by explicit dynamics (the fused loop of :func:`sph.total_lagrangian.advance`)
     with kinetic damping: the velocities are zeroed whenever the kinetic energy, sampled every
     ``check_every`` steps, has passed a peak. Converged when ‖f + f_ext‖ on the free DOFs ≤
-    tol · force_scale (default: ‖f_ext‖). Returns (x, converged, steps); the body's history is
-    committed along the way."""
+    tol · force_scale (default: the total applied load Σ|f_ext|). Returns (x, converged, steps);
+    the body's history is committed along the way."""
     disc = body.disc
     dt = cfl_time_step(spacing(body), body.table.wave_speed("strain"), dt_factor)
     if force_scale is None:
-        force_scale = max(float(np.linalg.norm(cons.f_ext)), 1e-300)
+        force_scale = max(float(np.abs(cons.f_ext).sum()), 1e-300)
     x = np.ascontiguousarray(x, dtype=np.float64).copy()
     x[cons.fixed] = x_target_fixed[cons.fixed]
     fixed = np.ascontiguousarray(cons.fixed, dtype=np.uint8)

@@ -54,7 +54,8 @@ class Discretisation:
 
     X (N, d) m; V (N,) integration volumes, m^d; m (N,) kg; h m (kernel scale, for information);
     kernel name; indptr/indices CSR neighbours; G, GT (nnz, d) the gradients G_ab and G_ba, 1/m;
-    L (N, d, d) the correction matrices where they exist (eq. 31); ok (N,) the gradient regular."""
+    L (N, d, d) the correction matrices where they exist (eq. 31); ok (N,) the gradient regular;
+    correction: the gradient correction used ('linear', 'quadratic', 'wls' …)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -67,6 +68,7 @@ class Discretisation:
     GT: np.ndarray
     L: np.ndarray
     ok: np.ndarray
+    correction: str = ""
 
     @property
     def n(self) -> int:
@@ -264,16 +266,62 @@ class Body:
 # Tangent stiffness K = ∂²Π/∂x∂x (static Newton, modal solve)
 # ================================================================================================
 
-@njit(parallel=True, **JIT)
-def _assemble_tangent(indptr, indices, G, V, A, offsets, rows, cols, vals):
-    """COO triplets of K_(c k),(e l) = Σ_a V_a Σ_jm g_ac,j A_a[k,j,l,m] g_ae,m with the stencil of a
-    {a} ∪ nbrs(a) and g_ab = G_ab, g_aa = −Σ_b G_ab (∂F_a/∂x_c = I ⊗ g_ac)."""
+@njit(**JIT)
+def _tangent_pattern(indptr, indices):
+    """The block sparsity of K: particle e is in row c when some stencil {a} ∪ nbrs(a) holds both
+    (neighbour lists are symmetric, so the owners a of c are c and its neighbours). Returns the
+    block CSR (bptr (N+1,), bcol (nnzb,)), each row sorted."""
     N = indptr.shape[0] - 1
-    d = G.shape[1]
-    for a in prange(N):
+    mark = np.full(N, -1, np.int64)
+    counts = np.zeros(N + 1, np.int64)
+    rows = []
+    for c in range(N):
+        cols = []
+        for q in range(indptr[c], indptr[c + 1] + 1):
+            a = c if q == indptr[c + 1] else indices[q]
+            for r in range(indptr[a], indptr[a + 1] + 1):
+                e = a if r == indptr[a + 1] else indices[r]
+                if mark[e] != c:
+                    mark[e] = c
+                    cols.append(e)
+        arr = np.array(cols, dtype=np.int64)
+        arr.sort()
+        rows.append(arr)
+        counts[c + 1] = arr.shape[0]
+    bptr = np.cumsum(counts)
+    bcol = np.empty(bptr[-1], np.int64)
+    for c in range(N):
+        bcol[bptr[c]:bptr[c + 1]] = rows[c]
+    return bptr, bcol
+
+
+@njit(**JIT)
+def _find(bcol, lo, hi, e):
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if bcol[mid] < e:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(**JIT)
+def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, vals):
+    """K_(c k),(e l) += V_a Σ_jm g_ac,j A_a[k,j,l,m] g_ae,m for every stencil a ∪ nbrs(a), with
+    g_ab = G_ab, g_aa = −Σ_b G_ab (∂F_a/∂x_c = I ⊗ g_ac), written straight into the CSR values of
+    the block pattern (row (c, k): the blocks e of row c, each d wide). Serial: stencils overlap."""
+    N = indptr.shape[0] - 1
+    for i in range(vals.shape[0]):
+        vals[i] = 0.0
+    g = np.empty((64, d))
+    ids = np.empty(64, np.int64)
+    B = np.empty((64, d, d, d))
+    for a in range(N):
         n = indptr[a + 1] - indptr[a] + 1
-        g = np.empty((n, d))
-        ids = np.empty(n, np.int64)
+        if n > g.shape[0]:
+            g = np.empty((2 * n, d))
+            ids = np.empty(2 * n, np.int64)
         ids[0] = a
         for k in range(d):
             g[0, k] = 0.0
@@ -283,35 +331,63 @@ def _assemble_tangent(indptr, indices, G, V, A, offsets, rows, cols, vals):
             for k in range(d):
                 g[q, k] = G[p, k]
                 g[0, k] -= G[p, k]
-        pos = offsets[a]
-        for s in range(n):
-            for t in range(n):
-                for k in range(d):
-                    for l in range(d):
+        Va = V[a]
+        if Va == 0.0:
+            continue
+        if B.shape[0] < n:
+            B = np.empty((2 * n, d, d, d))
+        for s in range(n):  # B_s[k, l, m] = V_a Σ_j g_sj A_a[k, j, l, m]
+            for k in range(d):
+                for l in range(d):
+                    for m in range(d):
                         v = 0.0
                         for j in range(d):
-                            for m in range(d):
-                                v += g[s, j] * A[a, k, j, l, m] * g[t, m]
-                        rows[pos] = ids[s] * d + k
-                        cols[pos] = ids[t] * d + l
-                        vals[pos] = V[a] * v
-                        pos += 1
+                            v += g[s, j] * A[a, k, j, l, m]
+                        B[s, k, l, m] = Va * v
+        for s in range(n):
+            c = ids[s]
+            row_len = (bptr[c + 1] - bptr[c]) * d
+            for t in range(n):
+                e = ids[t]
+                pos = _find(bcol, bptr[c], bptr[c + 1], e) - bptr[c]
+                for k in range(d):
+                    base = bptr[c] * d * d + k * row_len + pos * d
+                    for l in range(d):
+                        v = 0.0
+                        for m in range(d):
+                            v += B[s, k, l, m] * g[t, m]
+                        vals[base + l] += v
+
+
+def tangent_pattern(disc: Discretisation):
+    """The DOF-level CSR pattern (indptr, indices) of K and the block pattern (bptr, bcol), built
+    once per discretisation (cached on it)."""
+    cached = getattr(disc, "_tangent_pattern", None)
+    if cached is not None:
+        return cached
+    d = disc.dim
+    bptr, bcol = _tangent_pattern(disc.indptr, disc.indices)
+    nb = np.diff(bptr)
+    row_len = np.repeat(nb * d, d)  # every DOF row (c, k) holds the blocks of row c, d wide
+    indptr = np.zeros(disc.n * d + 1, np.int64)
+    np.cumsum(row_len, out=indptr[1:])
+    cols = (bcol[:, None] * d + np.arange(d)[None, :]).ravel()  # block columns → DOF columns
+    indices = np.concatenate([np.tile(cols[bptr[c] * d:bptr[c + 1] * d], d)
+                              for c in range(disc.n)])
+    cached = (indptr, indices, bptr, bcol)
+    disc._tangent_pattern = cached
+    return cached
 
 
 def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
-    """The symmetric Hessian ∂²Π/∂x∂x = −∂f/∂x, (N d × N d) CSR, from dP/dF blocks A (N, d,d,d,d)."""
+    """The symmetric Hessian ∂²Π/∂x∂x = −∂f/∂x, (N d × N d) CSR with sorted indices, from dP/dF
+    blocks A (N, d,d,d,d), assembled into the pattern of :func:`tangent_pattern`."""
     d = disc.dim
-    n = np.diff(disc.indptr) + 1
-    sizes = (n * n) * d * d
-    offsets = np.zeros(disc.n + 1, np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    nnz = int(offsets[-1])
-    rows = np.empty(nnz, np.int64)
-    cols = np.empty(nnz, np.int64)
-    vals = np.empty(nnz)
-    _assemble_tangent(disc.indptr, disc.indices, disc.G, disc.V, A, offsets, rows, cols, vals)
-    K = sp.csr_matrix((vals, (rows, cols)), shape=(disc.n * d, disc.n * d))
-    K.sum_duplicates()
+    indptr, indices, bptr, bcol = tangent_pattern(disc)
+    vals = np.empty(indices.shape[0])
+    _assemble_tangent(disc.indptr, disc.indices, disc.G, disc.V, A, bptr, bcol, d, vals)
+    K = sp.csr_matrix((vals, indices, indptr), shape=(disc.n * d, disc.n * d))
+    K.has_sorted_indices = True
     return K
 
 

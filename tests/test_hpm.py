@@ -199,10 +199,10 @@ def test_static_newton_agrees_with_dynamic_relaxation():
     agreement to 1e-3 covers the DR stopping error. The stabilised body has no static solver."""
     from workbench.scenes import Cantilever
 
-    sc = Cantilever(loads=(0.00192, 1.0))
-    newton = driver.solve("hpm", sc, 5)
-    dr = driver.solve("hpm", sc, 5, static="dr")
-    assert newton["status"] == ["ok", "ok"] and dr["status"] == ["ok", "ok"]
+    sc = Cantilever(loads=(1.0,))
+    newton = driver.solve("hpm", sc, 4)
+    dr = driver.solve("hpm", sc, 4, static="dr")
+    assert newton["status"] == ["ok"] and dr["status"] == ["ok"]
     assert np.allclose(newton["tip_deflection"], dr["tip_deflection"], rtol=1e-3)
     with pytest.raises(ValueError, match="static"):
-        driver.solve("hpm", sc, 5, stabilisation=1.0)
+        driver.solve("hpm", sc, 4, stabilisation=1.0)

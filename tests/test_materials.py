@@ -12,7 +12,7 @@ from workbench.materials import (HIST_DAMAGE, HIST_EPS_P, RING_RUBBER, TABLE1_ST
 
 # --- tolerances (relative unless said), each with the reason for its size --------------------
 TOL_ROUND = 1e-12     # identities that hold up to round-off of a few dozen flops
-TOL_ROUND_J2 = 1e-10  # the same through a Jacobi eigen-solve, log and exp (κ of the logs ~ 1e2)
+TOL_ROUND_J2 = 1e-10  # the same through an eigen-solve, log and exp (κ of the logs ~ 1e2)
 TOL_FD = 1e-6         # central differences: truncation O(h²) ~ 1e-12, round-off O(eps/h) ~ 1e-9
 TOL_ENERGY_FD = 1e-7  # P vs central differences of ψ: round-off eps·ψ/h ~ 1e-9 of |P|
 TOL_SMALL = 1e-4      # linearisation at δ = 1e-6: the neglected terms are O(δ · λ/μ) ≲ 1e-4
@@ -310,7 +310,7 @@ def test_exact_uniaxial_curve():
 
 def test_damage_zeroes_stress_once_eps_p_reaches_eps_L():
     epsL = 0.05
-    dam = J2.replace(eps_L=epsL)
+    dam = J2.replace(eps_L=epsL, failure="literal")  # the rule as printed (more in test_materials_j2)
     Fs = [uniaxial_F(J2, e) for e in np.linspace(0.01, 0.15, 15)]
     Pd, hd = drive(dam, Fs)
     Pu, hu = drive(J2, Fs)
@@ -347,7 +347,7 @@ def test_eigen_solver():
     for S in mats:
         a = S.copy()
         V = np.empty((3, 3))
-        assert kernels.eig_sym3(a, V) >= 0
+        assert kernels.eig_sym3_closed(a, V) == 0  # the closed form (more in test_materials_eigen)
         x = np.diag(a)
         scale = np.max(np.abs(S))
         assert np.max(np.abs(V @ np.diag(x) @ V.T - S)) < 1e-14 * scale * 10
@@ -396,3 +396,47 @@ def test_material_table_rows_match_each_material_alone():
         assert np.array_equal(r["stress"][n], alone["stress"])
         assert np.array_equal(r["A"][n], alone["A"])
     assert np.all(r["history"][mat_id != 1] == 0.0)  # elastic points keep their (unused) columns
+
+
+def test_parameter_layout():
+    """Slots of ``Material.params()`` (package docstring): the small-strain moduli from E and ν by
+    the textbook formulas, Swift constants, and the J2 kinds in slots 10 and 11."""
+    from workbench.materials import N_PARAMS
+
+    assert N_PARAMS == 12
+    E, nu = 202e9, 0.3
+    p = Material.j2(E=E, nu=nu, C=868.8e6, eps0=0.0013, n=0.179).params()
+    assert p.shape == (N_PARAMS,) and p[0] == 3
+    assert p[1] == pytest.approx(E * nu / ((1 + nu) * (1 - 2 * nu)), rel=TOL_ROUND)
+    assert p[2] == pytest.approx(E / (2 * (1 + nu)), rel=TOL_ROUND)
+    assert tuple(p[3:6]) == (868.8e6, 0.0013, 0.179) and p[6] == math.inf
+    assert p[7] == pytest.approx(868.8e6 * 0.0013 ** 0.179, rel=TOL_ROUND)  # σ_y(0) for law 3
+    assert p[10] == 0  # Swift hardening
+    for name, mat in ELASTIC.items():
+        assert mat.params().shape == (N_PARAMS,)
+    with pytest.raises(ValueError, match="prm"):  # a table of the wrong width is refused
+        kernels.material_points(np.eye(3)[None].copy(), np.zeros((1, 0)), SVK.params()[None, :10].copy(),
+                                np.zeros(1, np.int64))
+
+
+def test_return_map_meets_its_tolerance_after_every_plastic_step():
+    """The local Newton may stop on an a-priori bound of its residual (j2.j2_return_map);
+    the stress it returns must then satisfy the yield condition to the Newton tolerance
+    prm[9] = 1e-12 (relative), plus the round-off of recomputing q from P in numpy
+    (≈ 10 eps of the largest |τ_ij|, the pressure included)."""
+    rng = np.random.default_rng(21)
+    n_plastic = 0
+    for trial in range(60):
+        G = rng.standard_normal((3, 3))
+        G /= np.linalg.norm(G)
+        steps = rng.choice([1e-4, 1e-3, 1e-2, 5e-2])
+        path = [np.eye(3) + steps * k * G for k in range(1, 6)]
+        Ps, hs = drive(J2, path)
+        for F, P, h_old, h in zip(path, Ps, hs[:-1], hs[1:]):
+            if h[HIST_EPS_P] > h_old[HIST_EPS_P]:
+                n_plastic += 1
+                tau = kirchhoff(P, F)
+                sy = swift(J2, h[HIST_EPS_P])
+                bound = J2.tol * sy + 10 * np.finfo(float).eps * np.max(np.abs(tau))
+                assert abs(mises(tau) - sy) <= bound, (abs(mises(tau) - sy) / sy, steps)
+    assert n_plastic > 150

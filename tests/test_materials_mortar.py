@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 from workbench.materials import Material, MaterialTable, TABLE1_STEEL, evaluate, kernels
 from workbench.materials import mortar as mm
-from workbench.materials.mortar import MORTAR_003 as M
+from workbench.materials import MORTAR_003 as M
 
 # --- tolerances, each with the reason for its size -------------------------------------------
 TOL_ROUND = 1e-12   # a few dozen flops on O(1) numbers

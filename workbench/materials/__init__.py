@@ -8,38 +8,56 @@ vector ``prm`` that the numba point routines in :mod:`workbench.materials.kernel
 slot  meaning
 ====  ==========================================================================
 0     law code: 0 Saint Venant–Kirchhoff, 1 compressible neo-Hookean,
-      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky + Swift),
+      2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky, Swift or linear hardening),
       4 mortar of 003 (slots 3–9 its own: :mod:`workbench.materials.mortar`)
 1     Lamé λ, Pa (for law 2: the λ of eq. 12)
 2     shear modulus μ, Pa (law 2: unused, its small-strain value is c1 + c2)
-3     Swift C, Pa            (law 3)
-4     Swift ε0, -            (law 3)
-5     Swift n, -             (law 3)
-6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, stress zero once D ≥ 1
-7     c1, Pa                 (law 2)
+3     Swift C, Pa            (law 3, Swift);  linear: initial yield stress σ_y0, Pa
+4     Swift ε0, -            (law 3, Swift);  linear: hardening modulus H = dσ_y/dε_p, Pa
+5     Swift n, -             (law 3, Swift);  linear: 0
+6     damage limit ε_L, -    (law 3; ``inf``: no damage) — D = ε_p/ε_L, failed once D ≥ 1
+7     c1, Pa                 (law 2); initial yield stress σ_y(0), Pa (law 3: derived from the
+      hardening constants; a trial state with q ≤ σ_y(0) is elastic without evaluating σ_y(ε_p))
 8     c2, Pa                 (law 2)
 9     tolerance of the local Newton on the plastic multiplier (relative)
+10    hardening kind of J2: 0 Swift (slots 3–5 as above), 1 linear
+11    failure mode of J2 once D ≥ 1: 0 literal (P = 0), 1 compression only (τ = K ln J I if
+      J < 1, else 0); see :meth:`Material.j2`
 ====  ==========================================================================
 
-History per point (``n_history`` columns): none for the elastic laws; for J2 eleven floats,
-``[Cp⁻¹ (3×3, row-major), ε_p, D]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial left
-Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed.
+Law code 4 is the mortar law of 003 (:mod:`workbench.materials.mortar`; its own meanings of slots 1–9).
+
+History per point (``n_history`` columns): none for the elastic laws; for J2 thirteen floats,
+``[Cp⁻¹ (3×3, row-major), ε_p, D, W_p, W_rel]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial
+left Cauchy–Green tensor is ``be_tr = F Cp⁻¹ Fᵀ`` and only the current F is needed; D = ε_p/ε_L;
+W_p the plastic work ∫₀^{ε_p} σ_y dε_p and W_rel the stored energy released when the point failed,
+both per unit reference volume, J/m³ (:func:`energies`). Along any path the work done on a point
+is ∫ P : dF = ψ + W_p + W_rel, ψ the stored energy (:func:`energies`), up to the quadrature error
+of the path's time steps.
 
 Deformation gradients are always 3×3; plane strain is F33 = 1 with the 2×2 block taken from P.
+
+J2 hardening acts on the Kirchhoff yield stress as a function of the equivalent plastic strain:
+Swift σ_y = C (ε_p + ε0)^n (paper 000) or linear σ_y = σ_y0 + H ε_p (the bilinear steel of paper
+003, Fig. 14). A post-yield slope E_t of the uniaxial stress–strain curve is H = E E_t/(E − E_t)
+(:func:`linear_hardening_modulus`; the papers' E_t = E/100 is H = E/99).
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3, "mortar": 4}
-N_PARAMS = 10
-N_HISTORY_J2 = 11
-HIST_EPS_P = 9
-HIST_DAMAGE = 10
+from .. import jitcache as _jitcache
+from .layout import (FAILURE_CODES, HARDENING_CODES, HIST_DAMAGE, HIST_EPS_P,  # noqa: F401
+                     HIST_W_P, HIST_W_REL, LAW_CODES, N_HISTORY_J2, N_PARAMS)
+
+# the dispatch (kernels.py) calls the laws of the other modules: drop the package's cached machine
+# code when any of them changed (numba keys a function's cache on its own file only)
+_jitcache.guard(Path(__file__).parent / "__pycache__", _jitcache.sources_of(Path(__file__).parent))
 
 
 @dataclass(frozen=True)
@@ -47,7 +65,7 @@ class Material:
     """A constitutive law and its constants (SI units).
 
     Build with the class methods (:meth:`svk`, :meth:`neo_hooke`, :meth:`mooney_rivlin`,
-    :meth:`j2`); they validate the constants and raise ``ValueError`` naming the parameter and its
+    :meth:`j2`, :meth:`j2_linear`); they validate the constants and raise ``ValueError`` naming the parameter and its
     allowed range.
     """
 
@@ -63,6 +81,10 @@ class Material:
     c2: float = 0.0
     lam_mr: float = 0.0
     tol: float = 1e-12
+    hardening: str = "swift"
+    sy0: float = 0.0  # linear hardening: initial yield stress, Pa
+    H: float = 0.0    # linear hardening: dσ_y/dε_p, Pa
+    failure: str = "compression"
     f_t: float = 0.0          # mortar (law 4): tensile strength, Pa
     f_c: float = 0.0          # mortar: compressive strength (initial Mises yield), Pa
     eps_release: float = 0.0  # mortar: strain of complete stress release, -
@@ -96,10 +118,26 @@ class Material:
 
     @classmethod
     def j2(cls, E: float, nu: float, C: float, eps0: float, n: float, rho: float = 7974.0,
-           eps_L: float = math.inf) -> "Material":
+           eps_L: float = math.inf, failure: str = "compression") -> "Material":
         """Finite-strain J2: multiplicative split, Hencky elasticity, exponential-map return
-        mapping, Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff stress."""
-        return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L).validated()
+        mapping, Swift hardening σ_y = C (ε_p + ε0)^n on the Kirchhoff stress.
+
+        eps_L: limit plastic strain ε_L of the damage D = ε_p/ε_L (paper 000 eq. 36; ``inf``: no
+        failure). failure: what a point keeps once D ≥ 1 — ``"literal"``: nothing (P = 0, the
+        paper as printed, "stress zero once D ≥ 1"); ``"compression"`` (default): only a
+        compressive volumetric response τ = K ln J I for J < 1 (no tension, no shear; failed
+        points still do not interpenetrate)."""
+        return cls(law="j2", E=E, nu=nu, rho=rho, C=C, eps0=eps0, n=n, eps_L=eps_L,
+                   failure=failure).validated()
+
+    @classmethod
+    def j2_linear(cls, E: float, nu: float, sigma_y0: float, H: float, rho: float = 7850.0,
+                  eps_L: float = math.inf, failure: str = "compression") -> "Material":
+        """Finite-strain J2 (as :meth:`j2`) with linear isotropic hardening on the Kirchhoff
+        stress, σ_y = σ_y0 + H ε_p. Under uniaxial stress the post-yield slope of τ against the
+        log strain is E_t = E H/(E + H); from a given E_t use :func:`linear_hardening_modulus`."""
+        return cls(law="j2", E=E, nu=nu, rho=rho, eps_L=eps_L, hardening="linear", sy0=sigma_y0,
+                   H=H, failure=failure).validated()
 
     @classmethod
     def mortar(cls, E: float, nu: float, f_t: float, f_c: float, eps_release: float | None = None,
@@ -139,12 +177,25 @@ class Material:
         if not self.rho > 0:
             raise ValueError(f"rho: {self.rho} kg/m^3 is not allowed; density must be > 0")
         if self.law == "j2":
-            if not self.C > 0:
-                raise ValueError(f"C: {self.C} Pa is not allowed; Swift C must be > 0")
-            if not self.eps0 > 0:
-                raise ValueError(f"eps0: {self.eps0} is not allowed; Swift eps0 must be > 0")
-            if not (0 <= self.n < 1):
-                raise ValueError(f"n: {self.n} is not allowed; Swift exponent must lie in [0, 1)")
+            if self.hardening not in HARDENING_CODES:
+                raise ValueError(f"hardening: {self.hardening!r} is not one of "
+                                 f"{sorted(HARDENING_CODES)}")
+            if self.hardening == "swift":
+                if not self.C > 0:
+                    raise ValueError(f"C: {self.C} Pa is not allowed; Swift C must be > 0")
+                if not self.eps0 > 0:
+                    raise ValueError(f"eps0: {self.eps0} is not allowed; Swift eps0 must be > 0")
+                if not (0 <= self.n < 1):
+                    raise ValueError(f"n: {self.n} is not allowed; Swift exponent must lie in [0, 1)")
+            else:
+                if not (self.sy0 > 0 and math.isfinite(self.sy0)):
+                    raise ValueError(f"sigma_y0: {self.sy0} Pa is not allowed; the initial yield "
+                                     "stress must be > 0 and finite")
+                if not (self.H >= 0 and math.isfinite(self.H)):
+                    raise ValueError(f"H: {self.H} Pa is not allowed; the hardening modulus must "
+                                     "be >= 0 and finite")
+            if self.failure not in FAILURE_CODES:
+                raise ValueError(f"failure: {self.failure!r} is not one of {sorted(FAILURE_CODES)}")
             if not self.eps_L > 0:
                 raise ValueError(f"eps_L: {self.eps_L} is not allowed; strain limit must be > 0")
         if self.law == "mooney_rivlin" and not (self.c1 >= 0 and self.c2 >= 0 and self.c1 + self.c2 > 0):
@@ -176,8 +227,17 @@ class Material:
 
     @property
     def sigma_y0(self) -> float:
-        """Initial yield stress C ε0^n, Pa (J2 only)."""
+        """Initial yield stress, Pa (J2 only): C ε0^n (Swift) or σ_y0 (linear)."""
+        if self.hardening == "linear":
+            return self.sy0
         return self.C * self.eps0 ** self.n
+
+    def yield_stress(self, eps_p):
+        """Kirchhoff yield stress σ_y(ε_p), Pa (J2 only; numpy, for references and plots)."""
+        eps_p = np.asarray(eps_p, dtype=float)
+        if self.hardening == "linear":
+            return self.sy0 + self.H * eps_p
+        return self.C * (eps_p + self.eps0) ** self.n
 
     def wave_speed(self, plane: str | None = "strain") -> float:
         """Fastest small-strain elastic wave speed, m/s (P wave; in plane stress the plate wave)."""
@@ -203,6 +263,12 @@ class Material:
         p[6] = self.eps_L
         p[7], p[8] = self.c1, self.c2
         p[9] = self.tol
+        if self.law == "j2":
+            p[7] = self.sigma_y0
+            p[10] = HARDENING_CODES[self.hardening]
+            if self.hardening == "linear":
+                p[3], p[4], p[5] = self.sy0, self.H, 0.0
+            p[11] = FAILURE_CODES[self.failure]
         if self.law == "mortar":
             from .mortar import pack_params
 
@@ -219,9 +285,12 @@ class Material:
     def describe(self) -> dict:
         """Attributes for a dataset (law and its constants)."""
         d = {"material_law": self.law, "E": self.E, "nu": self.nu, "rho": self.rho}
+        if self.law == "j2" and self.hardening == "linear":
+            d.update(hardening="linear", sigma_y0=self.sy0, H=self.H)
+        elif self.law == "j2":
+            d.update(hardening="swift", swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n)
         if self.law == "j2":
-            d.update(swift_C=self.C, swift_eps0=self.eps0, swift_n=self.n, eps_L=self.eps_L,
-                     hardening_on="Kirchhoff stress")
+            d.update(eps_L=self.eps_L, failure=self.failure, hardening_on="Kirchhoff stress")
         if self.law == "mooney_rivlin":
             d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
         if self.law == "mortar":
@@ -297,11 +366,30 @@ class MaterialTable:
         return all(m.law == "svk" for m in self.materials)
 
 
+def linear_hardening_modulus(E: float, E_t: float) -> float:
+    """Hardening modulus H = dσ_y/dε_p, Pa, of linear J2 hardening whose uniaxial stress–strain
+    curve has the post-yield slope E_t (0 ≤ E_t < E): from dε = dτ/E + dτ/H, E_t = E H/(E + H),
+    so H = E E_t/(E − E_t). Paper 003's "E/100" (Fig. 14) is E_t = E/100, i.e. H = E/99."""
+    if not E > 0:
+        raise ValueError(f"E: {E} Pa is not allowed; E must be > 0")
+    if not (0 <= E_t < E):
+        raise ValueError(f"E_t: {E_t} Pa is not allowed; the post-yield slope must lie in [0, E)")
+    return E * E_t / (E - E_t)
+
+
 # Materials of the papers (scenes.md).
 TABLE1_STEEL = Material.j2(E=202e9, nu=0.3, C=868.8e6, eps0=0.0013, n=0.179, rho=7974.0)
 RUBBER = Material.from_bulk_shear("svk", K=3.25e6, G=7.15e5, rho=1000.0)
 RING_RUBBER = Material.mooney_rivlin(c1=1.265e5, c2=1.012e4, lam=1.012e7, rho=125.4)
 BEAM = Material.svk(E=1.0e5, nu=0.3, rho=1000.0)
+# Rebar of paper 003 (Table 1, Fig. 14): E = 206 GPa, ν = 0.3, yield 394 MPa, post-yield slope
+# E/100 of the stress–strain curve. The paper gives no density: 7850 kg/m³ (structural steel).
+REBAR_003 = Material.j2_linear(E=206e9, nu=0.3, sigma_y0=394e6,
+                               H=linear_hardening_modulus(206e9, 206e9 / 100), rho=7850.0)
+# Mortar of paper 003 (Table 1, Fig. 14): E, ν, strengths, post-yield slope E/100 in compression,
+# full release at 17 000 µ strain with 5 mm particles (§4.1), i.e. G_F = 68.4 N/m; ρ is not given
+# (2200 kg/m³).
+MORTAR_003 = Material.mortar(E=11.9e9, nu=0.22, f_t=1.61e6, f_c=16.1e6, eps_release=0.017)
 
 
 def evaluate(material, F: np.ndarray, history: np.ndarray | None = None,
@@ -346,4 +434,38 @@ def evaluate(material, F: np.ndarray, history: np.ndarray | None = None,
         res["A"] = A
     if single:
         res = {k: (v[0] if v is not None else None) for k, v in res.items()}
+    return res
+
+
+def energies(material, F: np.ndarray, history: np.ndarray | None = None, mat_id=None) -> dict:
+    """Energies per unit reference volume, J/m³, of many points, for energy balances: the work
+    done on a point along its path is ∫ P : dF = psi + W_p + W_rel.
+
+    material: a :class:`Material` or :class:`MaterialTable` (``mat_id`` as in :func:`evaluate`).
+    F: (N, 3, 3) or (3, 3); history: (N, n_history) of the end of the step (None: virgin).
+    Returns ``psi`` the stored energy (:func:`kernels.stored_energy_point`), ``W_p`` the plastic
+    work and ``W_rel`` the energy released at failure (J2 history columns; 0 for other laws),
+    each (N,) (scalars for one F). Multiply by the reference volumes and sum for a body.
+    """
+    from . import kernels
+
+    table = MaterialTable.of(material)
+    F = np.asarray(F, dtype=np.float64)
+    single = F.ndim == 2
+    F = np.ascontiguousarray(F.reshape(-1, 3, 3))
+    mat_id = (np.zeros(F.shape[0], np.int64) if mat_id is None
+              else np.ascontiguousarray(np.broadcast_to(mat_id, F.shape[:1]), dtype=np.int64))
+    if history is None:
+        history = table.initial_history(mat_id)
+    history = np.ascontiguousarray(np.asarray(history, dtype=np.float64).reshape(F.shape[0], -1))
+    if history.shape[1] != table.n_history:
+        raise ValueError(f"history: expected {table.n_history} columns, got {history.shape[1]}")
+    psi = kernels.stored_energies(F, history, table.params(), mat_id)
+    j2 = np.array([m.law == "j2" for m in table.materials])[mat_id]
+    W_p = np.where(j2, history[:, HIST_W_P], 0.0) if history.shape[1] > HIST_W_P else np.zeros_like(psi)
+    W_rel = (np.where(j2, history[:, HIST_W_REL], 0.0) if history.shape[1] > HIST_W_REL
+             else np.zeros_like(psi))
+    res = {"psi": psi, "W_p": W_p, "W_rel": W_rel}
+    if single:
+        res = {k: float(v[0]) for k, v in res.items()}
     return res

@@ -120,8 +120,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .kernels import (INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor, _fail, eig_sym3,
-                      svk_point)
+from .elastic import svk_point
+from .tensor import INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor, _fail
+from .tensor import eig_sym3_closed as eig_sym3
 
 LAW_CODE = 4
 N_HISTORY = 23
@@ -865,10 +866,3 @@ def mortar_energies(F, h, prm):
     for n in range(F.shape[0]):
         out[n] = mortar_energy(F[n], h[n], prm)
     return out
-
-
-# The mortar of 003: Table 1 and Fig. 14 (E, ν, strengths, post-yield slope E/100), full release at
-# 17 000 µ strain with 5 mm particles (§4.1), i.e. G_F = 68.4 N/m; ρ is not given (2200 kg/m³).
-from . import Material as _Material  # noqa: E402
-
-MORTAR_003 = _Material.mortar(E=11.9e9, nu=0.22, f_t=1.61e6, f_c=16.1e6, eps_release=0.017)

@@ -1,0 +1,187 @@
+"""The fracture scenes of the papers, as parameters and models.
+
+:class:`MicroCantilever` — the ceramic micro-cantilever of paper 000 (§4–5, Fig. 2–6, Tables 2–3):
+five Voronoi grains and the four grain boundaries between them, the grain at the support merged
+with the fixed block, finite-strain J2 with Swift hardening and the damage D = ε_p/ε_L of eq. 36;
+inter-granular (ε_L = 0.002 on the grain boundaries) or intra-granular (in the grains) fracture.
+
+The paper gives no dimensions; our choices (parameters, ``--set`` changes them): a beam
+L × B × H = 20 × 5 × 5 µm on a block 5 µm long, 10 µm wide and 10 µm high (the beam's top flush
+with the block's), the block's back face and bottom face held; the load a downward velocity of the
+top-face patch 2–4 µm from the free end (ramped up over ``t_ramp``); grain boundaries 0.5 µm thick
+(``gb_thickness``). Grains: the Voronoi cells (nearest-seed assignment, exact for any point — no
+polyhedra are built) of ``n_grains`` seeds placed one per equal slice of the beam's length, jittered
+inside their slice and across the section by a seeded generator (``seed``); a grain boundary is
+the set of points within half its thickness of the bisector plane of the two nearest seeds, when
+those are consecutive grains (:class:`GrainBoundary`). With seeds ordered along the beam, each
+grain meets only its neighbours, so there are ``n_grains − 1`` boundaries, as in Fig. 2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import workbench.scenes.model as m
+
+from ..materials import Material
+from .params import ParameterError, SceneError, Scene, param
+from .shapes import Box, Plane, Shape, Union, VoronoiCell, _points
+
+TABLE2_E = (222e9, 212e9, 202e9, 192e9, 182e9)
+"""000 Table 2: Young's moduli of the five grains, Pa (the grain at the support first)."""
+TABLE3_E = 202e9
+"""000 Table 3: Young's modulus of the grain boundaries, Pa."""
+
+
+@dataclass(frozen=True)
+class GrainBoundary(Shape):
+    """The points whose two nearest seeds are ``i`` and ``j`` and that lie within ``thickness``/2
+    of their bisector plane — the grain boundary between Voronoi cells i and j — cut by
+    ``within``. The distance of X to the bisector is (|X − s_j|² − |X − s_i|²)/(2 |s_j − s_i|)."""
+
+    seeds: tuple
+    i: int
+    j: int
+    thickness: float
+    within: Shape | None = None
+
+    def contains(self, X, tol=0.0):
+        X = _points(X)
+        s = np.asarray(self.seeds, dtype=float)
+        d2 = ((X[:, None, :] - s[None]) ** 2).sum(axis=2)
+        order = np.argsort(d2, axis=1)[:, :2]
+        pair = ((order[:, 0] == self.i) & (order[:, 1] == self.j)) | \
+               ((order[:, 0] == self.j) & (order[:, 1] == self.i))
+        gap = np.abs(d2[:, self.j] - d2[:, self.i]) / (2 * np.linalg.norm(s[self.j] - s[self.i]))
+        ok = pair & (gap <= 0.5 * self.thickness + tol)
+        if self.within is not None:
+            ok &= self.within.contains(X, tol)
+        return ok
+
+    def bounds(self):
+        return self.within.bounds() if self.within is not None else None
+
+
+@dataclass(frozen=True)
+class MicroCantilever(Scene):
+    """Micro-cantilever with grains and grain boundaries (000 §4–5); module docstring."""
+
+    name: str = field(default="microcantilever", metadata=dict(hidden=True))
+    case: str = param("inter", "-", "inter-granular (GB limit strain eps_L_low) or intra-granular",
+                      choices=("inter", "intra"))
+    dim: int = param(3, "-", "3 (the study's result) or 2 (plane strain, for --quick and tests)",
+                     choices=(2, 3))
+    L: float = param(20e-6, "m", "beam length", lo=0, lo_open=True)
+    B: float = param(5e-6, "m", "beam width (3-D)", lo=0, lo_open=True)
+    H: float = param(5e-6, "m", "beam height", lo=0, lo_open=True)
+    block: float = param(5e-6, "m", "length of the support block behind the beam", lo=0, lo_open=True)
+    block_depth: float = param(5e-6, "m", "depth of the block below the beam", lo=0)
+    gb_thickness: float = param(0.5e-6, "m", "grain-boundary thickness", lo=0, lo_open=True)
+    n_grains: int = param(5, "-", "grains along the beam (a positive integer)", lo=1, hi=50)
+    seed: int = param(3, "-", "seed of the Voronoi seeds", lo=0)
+    jitter: float = param(0.3, "-", "seed jitter within its slice, over the slice length", lo=0, hi=0.5)
+    E_gb: float = param(TABLE3_E, "Pa", "Young's modulus of the grain boundaries (Table 3)", lo=0, lo_open=True)
+    nu: float = param(0.3, "-", "Poisson's ratio", lo=-1, hi=0.5, lo_open=True, hi_open=True)
+    C: float = param(868.8e6, "Pa", "Swift C", lo=0, lo_open=True)
+    eps0: float = param(0.0013, "-", "Swift eps0", lo=0, lo_open=True)
+    n: float = param(0.179, "-", "Swift exponent", lo=0, hi=1, hi_open=True)
+    rho: float = param(7974.0, "kg/m^3", "density", lo=0, lo_open=True)
+    eps_L_low: float = param(0.002, "-", "limit plastic strain where fracture is meant to run", lo=0, lo_open=True)
+    eps_L_high: float = param(1.0, "-", "limit plastic strain elsewhere", lo=0, lo_open=True)
+    failure: str = param("compression", "-", "failed particle: keeps compression, or literal (stress 0)",
+                         choices=("compression", "literal"))
+    band: float = param(0.0, "m", "crack-band width (0: eps_L as given; > 0: eps_L scaled by band/spacing)", lo=0)
+    velocity: float = param(0.5, "m/s", "downward velocity of the loading patch", lo=0, lo_open=True)
+    t_ramp: float = param(2e-7, "s", "time over which the velocity is ramped up", lo=0, lo_open=True)
+    t_end: float = param(4e-6, "s", "simulated time", lo=0, lo_open=True)
+    dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10, lo_open=True)
+
+    def check(self):
+        if self.gb_thickness >= min(self.H, self.L / self.n_grains):
+            raise ParameterError(f"gb_thickness: {self.gb_thickness:g} m is out of range; allowed: "
+                                 f"(spacing, {min(self.H, self.L / self.n_grains):g}) m")
+
+    # -- geometry -----------------------------------------------------------------------------
+    def seeds(self) -> np.ndarray:
+        """The Voronoi seeds (n_grains, dim), m: one per equal slice of the beam's length."""
+        rng = np.random.default_rng(self.seed)
+        n, L = self.n_grains, self.L
+        x = (np.arange(n) + 0.5 + self.jitter * rng.uniform(-1, 1, n)) * L / n
+        cols = [x]
+        for w in ((self.B, self.H) if self.dim == 3 else (self.H,)):
+            cols.append(0.3 * w * rng.uniform(-1, 1, n))
+        return np.stack(cols, axis=1)
+
+    def beam(self) -> Box:
+        if self.dim == 3:
+            return Box((0.0, -self.B / 2, -self.H / 2), (self.L, self.B / 2, self.H / 2))
+        return Box((0.0, -self.H / 2), (self.L, self.H / 2))
+
+    def block_box(self) -> Box:
+        top = self.H / 2
+        bottom = -self.H / 2 - self.block_depth
+        if self.dim == 3:
+            return Box((-self.block, -self.B, bottom), (0.0, self.B, top))
+        return Box((-self.block, bottom), (0.0, top))
+
+    def limits(self, spacing: float) -> tuple[float, float]:
+        """(ε_L of the grains, ε_L of the grain boundaries) for the case, crack-band scaled."""
+        low, high = self.eps_L_low, self.eps_L_high
+        if self.band > 0:
+            low *= self.band / spacing
+        return (high, low) if self.case == "inter" else (low, high)
+
+    def materials(self, spacing: float):
+        eps_grain, eps_gb = self.limits(spacing)
+        j2 = dict(nu=self.nu, C=self.C, eps0=self.eps0, n=self.n, rho=self.rho)
+        grains = [Material.j2(E=TABLE2_E[k % len(TABLE2_E)], eps_L=eps_grain, **j2) for k in range(self.n_grains)]
+        gb = Material.j2(E=self.E_gb, eps_L=eps_gb, **j2)
+        if self.failure != "compression":
+            grains = [g.replace(failure=self.failure) for g in grains]
+            gb = gb.replace(failure=self.failure)
+        return grains, gb
+
+    def model(self, spacing: float | None = None) -> m.Model:
+        dx = self.H / 10 if spacing is None else spacing
+        if not dx <= self.gb_thickness * (1 + 1e-9):
+            raise SceneError(f"gb_thickness: {self.gb_thickness:g} m is out of range; allowed: at least "
+                             f"one particle spacing ({dx:g} m at this resolution)")
+        d = self.dim
+        up = d - 1  # the vertical axis
+        seeds = self.seeds()
+        beam = self.beam()
+        grains, gb = self.materials(dx)
+        regions = [m.Region("grain0", Union((VoronoiCell(seeds, 0, beam), self.block_box())), grains[0])]
+        regions += [m.Region(f"grain{k}", VoronoiCell(seeds, k, beam), grains[k])
+                    for k in range(1, self.n_grains)]
+        regions += [m.Region(f"gb{k}{k + 1}", GrainBoundary(seeds, k, k + 1, self.gb_thickness, beam),
+                             gb, priority=1) for k in range(self.n_grains - 1)]
+        lo = self.block_box().lo
+        big = 10 * (self.B + self.H)
+        patch = Plane(up, self.H / 2) & Box((0.8 * self.L,) + (-big,) * (d - 1),
+                                            (0.9 * self.L,) + (big,) * (d - 1))
+        v = m.Table((0.0, self.t_ramp), (0.0, -self.velocity))
+        grain_names = tuple(f"grain{k}" for k in range(self.n_grains))
+        gb_names = tuple(f"gb{k}{k + 1}" for k in range(self.n_grains - 1))
+        return m.Model(
+            dim=d, plane="strain" if d == 2 else None, length=self.H, name=self.name,
+            regions=tuple(regions),
+            sets=(m.Set("back", Plane(0, lo[0])), m.Set("bottom", Plane(up, lo[up])),
+                  m.Set("patch", patch)),
+            constraints=(m.Clamp("back"), m.Clamp("bottom"),
+                         m.Prescribed("patch", up, velocity=v)),
+            drive=m.Explicit(self.t_end, self.dt_factor, n_out=400, energy_growth=None),
+            observables=(m.Reaction("force", "patch", up), m.Displacement("deflection", "patch", up),
+                         m.FailedFraction("failed", None),
+                         m.FailedFraction("failed_grains", grain_names),
+                         m.FailedFraction("failed_gb", gb_names),
+                         *[m.FailedFraction(f"failed_{r}", (r,)) for r in grain_names + gb_names]),
+            notes=(f"case {self.case}; grains: Voronoi cells of seeds {np.round(seeds * 1e6, 3).tolist()} um; "
+                   f"grain boundaries {self.gb_thickness * 1e6:g} um thick; grain 0 merged with the block",))
+
+    def summarise(self, out: dict) -> dict:
+        """``load`` (N: the force the loading patch exerts on the beam, positive downward) and
+        ``deflection_down`` (m: the patch's mean displacement, positive downward) histories."""
+        return dict(load=-np.asarray(out.get("force", ()), float),
+                    deflection_down=-np.asarray(out.get("deflection", ()), float))
