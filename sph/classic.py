@@ -21,15 +21,21 @@ kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-propor
 4. forces (:func:`force_pass`, eq. 1): a_i = Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f_ij^n (R_i + R_j)
    − Π_ij I) ∇_i W_ij + a_ext, with Monaghan's artificial viscosity
    Π_ij = (−α c̄_ij μ_ij + β μ_ij²)/ρ̄_ij for v_ij·x_ij < 0, μ_ij = h v_ij·x_ij/(r² + 0.01h²),
-   c̄_ij the mean of the two particles' P-wave speeds, and, optionally (``artificial_stress`` = ε > 0),
-   the artificial stress of Gray, Monaghan & Swift (2001) (:func:`artificial_stress_row`): in the
-   principal frame of σ_i (in 2-D of its in-plane block; in 3-D the eigen-decomposition of σ_i),
+   c̄_ij the mean of the two particles' P-wave speeds, and, optionally
+   (``artificial_stress`` = ε > 0), the artificial stress of Gray, Monaghan & Swift (2001)
+   (:func:`artificial_stress_row`): in the principal frame of σ_i (in 2-D of its in-plane block;
+   in 3-D the eigen-decomposition of σ_i),
    R'^a = −ε σ'^a/ρ_i² where σ'^a > 0 (else 0), rotated back; f_ij = W(r_ij)/W(Δx), exponent n = 4;
 5. kick: v ← v + Δt/2 a.
 
 Every pair term is antisymmetric (∇_i W_ij = −∇_j W_ji, the bracket symmetric), so linear momentum
-is conserved to round-off. The compiled kernels are written for any d with 2-D specialisations of
-the pair loops (the plate's time loop).
+is conserved to round-off; the torque of the non-central stress term is not zero (angular momentum
+is not conserved exactly). About the reference configuration and without viscosity, eq. 1–3 are
+the gradient of the stored energy ½ Σ_i V_i ε_i : C_i : ε_i (ε_i = sym L_i of the displacements)
+where neighbouring particles have equal density: m_i m_j/ρ_i² = V_i V_j ρ_j/ρ_i, so a density
+contrast between materials makes the linearised scheme non-conservative at their interface.
+The compiled kernels are written for any d with 2-D specialisations of the pair loops (the
+plate's time loop).
 """
 from __future__ import annotations
 
@@ -39,7 +45,8 @@ import numpy as np
 from numba import njit, prange
 
 from workbench.materials import MaterialTable
-from workbench.materials.kernels import eig_sym3, material_point
+from workbench.materials.kernels import material_point
+from workbench.materials.tensor import eig_sym3_closed
 
 from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
@@ -177,7 +184,7 @@ def hyperelastic_update(Fi, L, dt, hist_i, prm_row, hist_new_i, s, Fn, P, A):
 @njit(inline="always", **JIT)
 def artificial_stress_row(i, sigma, rho_i, eps_as, d, R, a, V):
     """Gray, Monaghan & Swift (2001): R_i = Σ_a r_a e_a ⊗ e_a over the principal directions e_a of
-    σ_i (2-D: of its in-plane block; 3-D: :func:`workbench.materials.kernels.eig_sym3`), with
+    σ_i (2-D: of its in-plane block; 3-D: :func:`workbench.materials.tensor.eig_sym3_closed`), with
     r_a = −ε σ_a/ρ_i² where σ_a > 0, else 0; into R[i] (d, d), Pa·m⁶/kg². a, V (3, 3) scratch."""
     ri2 = 1.0 / (rho_i * rho_i)
     if d == 2:
@@ -199,7 +206,7 @@ def artificial_stress_row(i, sigma, rho_i, eps_as, d, R, a, V):
     for k in range(3):
         for l in range(3):
             a[k, l] = sigma[i, k, l]
-    eig_sym3(a, V)
+    eig_sym3_closed(a, V)
     for k in range(3):
         for l in range(3):
             R[i, k, l] = 0.0
@@ -282,7 +289,8 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
         vr = (v[i, 0] - v[j, 0]) * dx0 + (v[i, 1] - v[j, 1]) * dx1
         if vr < 0.0 and (alpha > 0.0 or beta > 0.0):
             mu_ij = h * vr / (r2 + 0.01 * h * h)
-            pi_ij = (-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij) / (0.5 * (rho[i] + rho[j]))
+            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
+                     / (0.5 * (rho[i] + rho[j])))
             t00 -= pi_ij
             t11 -= pi_ij
         ax += m[j] * (t00 * gx + t01 * gy)
@@ -292,8 +300,8 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
 
 @njit(inline="always", **JIT)
 def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, out):
-    """Eq. 1 for particle i, any d: Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij
-    into out[i] (d,), m/s²."""
+    """Eq. 1 for particle i, any d:
+    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij into out[i] (d,), m/s²."""
     d = x.shape[1]
     for k in range(d):
         out[i, k] = 0.0
@@ -315,7 +323,8 @@ def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
         pi_ij = 0.0
         if vr < 0.0 and (alpha > 0.0 or beta > 0.0):
             mu_ij = h * vr / (r2 + 0.01 * h * h)
-            pi_ij = (-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij) / (0.5 * (rho[i] + rho[j]))
+            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
+                     / (0.5 * (rho[i] + rho[j])))
         for k in range(d):
             s = 0.0
             for l in range(d):
@@ -381,13 +390,14 @@ class Body:
         if not (alpha >= 0 and beta >= 0):
             raise ValueError("alpha, beta: artificial-viscosity coefficients must be >= 0")
         if not (0 <= artificial_stress <= 1):
-            raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie in [0, 1]")
+            raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie "
+                             "in [0, 1]")
         table = MaterialTable.of(material)
         if stress == "hypoelastic":
             for mt in table.materials:
                 if mt.law not in HYPOELASTIC_LAWS:
-                    raise ValueError(f"stress: 'hypoelastic' uses the small-strain λ, μ of an elastic "
-                                     f"law; law {mt.law!r} needs stress='hyperelastic'")
+                    raise ValueError(f"stress: 'hypoelastic' uses the small-strain λ, μ of an "
+                                     f"elastic law; law {mt.law!r} needs stress='hyperelastic'")
         self.X = np.ascontiguousarray(X, dtype=np.float64)
         N, d = self.X.shape
         if d not in (2, 3):
@@ -395,8 +405,10 @@ class Body:
         self.table = table
         self.mat_id = (np.zeros(N, np.int64) if mat_id is None
                        else np.ascontiguousarray(mat_id, dtype=np.int64))
-        if self.mat_id.shape != (N,) or (N and not (0 <= self.mat_id.min() and self.mat_id.max() < len(table))):
-            raise ValueError(f"mat_id: must be (N,) = ({N},) rows of a table of {len(table)} materials")
+        mid = self.mat_id
+        if mid.shape != (N,) or (N and not (0 <= mid.min() and mid.max() < len(table))):
+            raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
+                             "(rows of the material table)")
         mats = table.materials
         row = self.mat_id
         self.dx = float(dx)
@@ -424,7 +436,8 @@ class Body:
         self.hist = table.initial_history(self.mat_id)
         self.hist_new = self.hist.copy()
         self.status = np.zeros(N, np.int64)
-        self.fixed = np.zeros((N, d), np.uint8) if fixed is None else np.ascontiguousarray(fixed, np.uint8)
+        self.fixed = (np.zeros((N, d), np.uint8) if fixed is None
+                      else np.ascontiguousarray(fixed, np.uint8))
         self.v_fix = np.zeros((N, d))
         self.a_ext = np.zeros((N, d))
         self.damping = 0.0
@@ -559,7 +572,8 @@ class Classic(ParticleBody):
 
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
         if not (damping >= 0 and math.isfinite(damping)):
-            raise ValueError(f"damping: {damping!r} is not allowed; mass damping must be >= 0 (1/s)")
+            raise ValueError(f"damping: {damping!r} is not allowed; mass damping must be >= 0 "
+                             "(1/s)")
         self._set_loads(f_ext, fixed, v_fix, extra, damping)
         done = self.b.step(dt, n)
         self.t, self.steps = self.b.t, self.b.steps

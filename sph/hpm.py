@@ -1,6 +1,6 @@
 """Hamiltonian particle method (HPM; Suzuki & Koshizuka 2008, as used in 004 §II), total Lagrangian,
-2-D plane strain and 3-D, a material (a row of the body's :class:`~workbench.materials.MaterialTable`)
-per particle.
+2-D plane strain and 3-D, a material (a row of the body's
+:class:`~workbench.materials.MaterialTable`) per particle.
 
 Everything weight-related is computed once in the reference configuration X (the *Lagrangian
 kernel*): neighbours within the influence radius r_e (:mod:`sph.neighbours`), the weights
@@ -11,7 +11,7 @@ and the moment matrices A_i = Σ_j w_ij X_ij ⊗ X_ij (eq. 5, d × d, :func:`ref
 Then per evaluation:
 
 * the deformation gradient by weighted least squares, F_i = (Σ_j w_ij x_ij ⊗ X_ij) A_i⁻¹ (eq. 4,
-  :func:`deformation_gradient`): exact for every affine motion on any particle arrangement (F is
+  :func:`deformation_gradient_row`): exact for every affine motion on any particle arrangement (F is
   3×3; in 2-D F33 = 1, plane strain);
 * P_i = F_i S_i from the shared material library, row ``prm[mat_id[i]]`` of the table
   (:func:`workbench.materials.kernels.material_point`; a body of Saint Venant–Kirchhoff materials,
@@ -213,51 +213,88 @@ def deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, B, F):
             F[k, l] = s
 
 
+@njit(inline="always", **JIT)
+def _count_failed(status):
+    """Number of non-zero material status codes (counted after the parallel loop: a reduction
+    inside it costs the 2-D plate a few per cent)."""
+    n = 0
+    for i in range(status.shape[0]):
+        if status[i] != 0:
+            n += 1
+    return n
+
+
 @njit(parallel=True, fastmath=FASTMATH, **JIT)
 def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, F_all, M,
                 h_new, status):
-    """For every particle: F_i (eq. 4) into F_all (N, 3, 3); P_i from the shared material library
-    with the parameter row prm[mat_id[i]] (prm (n_mat, N_PARAMS) the material table; ``all_svk``:
-    every row is Saint Venant–Kirchhoff, whose law is called directly, without dispatch or
-    history); M_i = V_i P_i A_i⁻¹ into M (N, d, d), Pa·m^(d−2) — the per-particle factor of
-    eq. 7. History h_old → h_new (N, n_history); ``status`` (N,) gets the material
-    routine's return code (0 ok). Returns the number of failed points (status ≠ 0)."""
+    """For every particle, any d: F_i (eq. 4, :func:`deformation_gradient_row`) into F_all
+    (N, 3, 3); P_i from the shared material library with the parameter row prm[mat_id[i]] (prm
+    (n_mat, N_PARAMS) the material table; ``all_svk``: every row is Saint Venant–Kirchhoff, whose
+    law is called directly, without dispatch or history); M_i = V_i P_i A_i⁻¹ into M (N, d, d),
+    Pa·m^(d−2) — the per-particle factor of eq. 7. History h_old → h_new (N, n_history);
+    ``status`` (N,) gets the material routine's return code (0 ok). Returns the number of failed
+    points (status ≠ 0). :func:`_stress_pass_2d` is its plane-strain specialisation (the time
+    loop's hot path)."""
     N, d = x.shape
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
-    nfail = 0
     for c in prange(N_CHUNKS):
         F = np.empty((3, 3))
         B = np.empty((3, 3))
         P = np.empty((3, 3))
         A = np.empty((3, 3, 3, 3))
+        cur = mat_id[c * chunk] if c * chunk < N else 0
+        row = prm[cur]  # the material row, switched only where mat_id changes (regions are runs)
         for i in range(c * chunk, min(N, (c + 1) * chunk)):
-            if d == 2:
-                _deformation_gradient_row_2d(i, x, indptr, indices, X_ij, w, Ainv, F)
-            else:
-                deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, B, F)
+            if mat_id[i] != cur:
+                cur = mat_id[i]
+                row = prm[cur]
+            deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, B, F)
             if all_svk:
-                status[i] = svk_point(F, prm[mat_id[i]], P, A, False)
+                status[i] = svk_point(F, row, P, A, False)
             else:
-                status[i] = material_point(F, h_old[i], prm[mat_id[i]], P, h_new[i], A, False)
+                status[i] = material_point(F, h_old[i], row, P, h_new[i], A, False)
             for k in range(3):
                 for l in range(3):
                     F_all[i, k, l] = F[k, l]
             vi = V[i]
-            if d == 2:
-                M[i, 0, 0] = vi * (P[0, 0] * Ainv[i, 0, 0] + P[0, 1] * Ainv[i, 1, 0])
-                M[i, 0, 1] = vi * (P[0, 0] * Ainv[i, 0, 1] + P[0, 1] * Ainv[i, 1, 1])
-                M[i, 1, 0] = vi * (P[1, 0] * Ainv[i, 0, 0] + P[1, 1] * Ainv[i, 1, 0])
-                M[i, 1, 1] = vi * (P[1, 0] * Ainv[i, 0, 1] + P[1, 1] * Ainv[i, 1, 1])
+            for k in range(d):
+                for l in range(d):
+                    s = 0.0
+                    for q in range(d):
+                        s += P[k, q] * Ainv[i, q, l]
+                    M[i, k, l] = vi * s
+    return _count_failed(status)
+
+
+@njit(parallel=True, **JIT)
+def _stress_pass_2d(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, F_all, M,
+                    h_new, status):
+    """:func:`stress_pass` in plane strain (d = 2), written out with scalar accumulation; the
+    same arguments and result."""
+    N = x.shape[0]
+    chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    for c in prange(N_CHUNKS):
+        F = np.empty((3, 3))
+        P = np.empty((3, 3))
+        A = np.empty((3, 3, 3, 3))
+        cur = mat_id[c * chunk] if c * chunk < N else 0
+        row = prm[cur]
+        for i in range(c * chunk, min(N, (c + 1) * chunk)):
+            if mat_id[i] != cur:
+                cur = mat_id[i]
+                row = prm[cur]
+            _deformation_gradient_row_2d(i, x, indptr, indices, X_ij, w, Ainv, F)
+            if all_svk:
+                status[i] = svk_point(F, row, P, A, False)
             else:
-                for k in range(d):
-                    for l in range(d):
-                        s = 0.0
-                        for m in range(d):
-                            s += P[k, m] * Ainv[i, m, l]
-                        M[i, k, l] = vi * s
-            if status[i] != 0:
-                nfail += 1
-    return nfail
+                status[i] = material_point(F, h_old[i], row, P, h_new[i], A, False)
+            for k in range(3):
+                for l in range(3):
+                    F_all[i, k, l] = F[k, l]
+            for k in range(2):
+                M[i, k, 0] = V[i] * (P[k, 0] * Ainv[i, 0, 0] + P[k, 1] * Ainv[i, 1, 0])
+                M[i, k, 1] = V[i] * (P[k, 0] * Ainv[i, 0, 1] + P[k, 1] * Ainv[i, 1, 1])
+    return _count_failed(status)
 
 
 @njit(inline="always", **JIT)
@@ -291,7 +328,8 @@ def _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab):
 @njit(inline="always", **JIT)
 def force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, out):
     """Eq. 7 for particle i, any d: f_i = Σ_j w_ij (M_i + M_j) X_ij plus, where ``stab`` and
-    c_i or c_j ≠ 0, the stabilisation force 2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)];
+    c_i or c_j ≠ 0, the stabilisation force
+    2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)];
     written into out[i] (d,), N (N/m in 2-D)."""
     d = x.shape[1]
     for k in range(d):
@@ -352,6 +390,20 @@ def stabilisation_energy(x, indptr, indices, X_ij, w, F_all, cs):
     return e.sum()
 
 
+@njit(inline="always", **JIT)
+def _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping):
+    """The velocity update closing a step for particle i: eq. 8's v += Δt a (``euler``) or the
+    closing half kick of velocity Verlet."""
+    if euler:
+        for k in range(v.shape[1]):
+            if fixed[i, k]:
+                v[i, k] = v_fix[i, k]
+            else:
+                v[i, k] = (v[i, k] + dt * acc[i, k]) / (1.0 + damping * dt)
+    else:
+        kick_row(i, v, acc, fixed, v_fix, dt, damping)
+
+
 @njit(parallel=True, fastmath=FASTMATH, **JIT)
 def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping, indptr, indices,
              X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, cs, F_all, M, h_new, status):
@@ -362,58 +414,45 @@ def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping, ind
     N, d = x.shape
     nh = h_old.shape[1]
     stab = np.any(cs != 0.0)
-    # Without stabilisation the force loop reads no positions, so the next step's kick–drift is
-    # fused into it (one pass less over the particles); the last step of the call stops at the
-    # synchronised state.
-    fuse = not stab and not euler
-    if not euler:
-        for i in prange(N):
-            kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
     for s in range(n_steps):
-        if euler:
-            for i in prange(N):
-                for k in range(d):
-                    if fixed[i, k]:
-                        v[i, k] = v_fix[i, k]
-                    x[i, k] += dt * v[i, k]
-        nfail = stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk,
-                            F_all, M, h_new, status)
-        last = s == n_steps - 1 or nfail > 0
-        drift_here = fuse and not last
-        bad = 0
         for i in prange(N):
-            if d == 2:
-                fx, fy = _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
-                acc[i, 0] = fx / m[i] + a_ext[i, 0]
-                acc[i, 1] = fy / m[i] + a_ext[i, 1]
-            else:
-                force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, acc)
-                for k in range(d):
-                    acc[i, k] = acc[i, k] / m[i] + a_ext[i, k]
             if euler:
                 for k in range(d):
                     if fixed[i, k]:
                         v[i, k] = v_fix[i, k]
-                    else:
-                        v[i, k] = (v[i, k] + dt * acc[i, k]) / (1.0 + damping * dt)
+                    x[i, k] += dt * v[i, k]
             else:
-                kick_row(i, v, acc, fixed, v_fix, dt, damping)
-            ok = True
-            for k in range(d):
-                ok = ok and math.isfinite(acc[i, k])
-            if not ok:
-                bad += 1
-            if drift_here:
                 kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
+        if d == 2:
+            nfail = _stress_pass_2d(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id,
+                                    all_svk, F_all, M, h_new, status)
+        else:
+            nfail = stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk,
+                                F_all, M, h_new, status)
+        bad = 0
+        if d == 2:  # the plane-strain loop on its own: a lean body for the hot path
+            for i in prange(N):
+                fx, fy = _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
+                acc[i, 0] = fx / m[i] + a_ext[i, 0]
+                acc[i, 1] = fy / m[i] + a_ext[i, 1]
+                _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping)
+                if not (math.isfinite(acc[i, 0]) and math.isfinite(acc[i, 1])):
+                    bad += 1
+        else:
+            for i in prange(N):
+                force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, acc)
+                for k in range(d):
+                    acc[i, k] = acc[i, k] / m[i] + a_ext[i, k]
+                _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping)
+                for k in range(d):
+                    if not math.isfinite(acc[i, k]):
+                        bad += 1
         if nh > 0:
             for i in prange(N):
                 for k in range(nh):
                     h_old[i, k] = h_new[i, k]
         if bad > 0 or nfail > 0:
             return s + 1
-        if not euler and not fuse and not last:
-            for i in prange(N):
-                kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
     return n_steps
 
 
@@ -481,7 +520,8 @@ def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisa
     mat_id = (np.zeros(N, np.int64) if mat_id is None
               else np.ascontiguousarray(mat_id, dtype=np.int64))
     if mat_id.shape != (N,) or (N and not (0 <= mat_id.min() and mat_id.max() < len(table))):
-        raise ValueError(f"mat_id: must be (N,) = ({N},) rows of a table of {len(table)} materials")
+        raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
+                         "(rows of the material table)")
     re = re_ratio * dx
     indptr, indices = neighbour_list(X, re)
     if body is not None:
@@ -524,8 +564,9 @@ def _evaluate(model: Model, x: np.ndarray, h: np.ndarray):
     M = np.empty((N, d, d))
     status = np.zeros(N, np.int64)
     h_new = h.copy()
-    stress_pass(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V, h,
-                model.prm, model.mat_id, model.all_svk, F, M, h_new, status)
+    sp = _stress_pass_2d if d == 2 else stress_pass
+    sp(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V, h, model.prm,
+       model.mat_id, model.all_svk, F, M, h_new, status)
     return F, M, h_new, status
 
 
@@ -594,7 +635,8 @@ def energies(model: Model, st: State) -> tuple[float, float]:
 
 
 def time_step(model: Model, dt_factor: float) -> float:
-    """dt = dt_factor · Δx / c_p (shared CFL estimate; c_p the fastest P-wave speed of the table)."""
+    """dt = dt_factor · Δx / c_p (shared CFL estimate; c_p the fastest P-wave speed of the
+    table)."""
     return cfl_time_step(model.dx, model.table.wave_speed("strain"), dt_factor)
 
 
@@ -612,7 +654,8 @@ def wls_discretisation(model: Model):
 
     N, d = model.n, model.dim
     rows = np.repeat(np.arange(N), np.diff(model.indptr))
-    G = np.ascontiguousarray(model.w[:, None] * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij))
+    G = np.ascontiguousarray(model.w[:, None]
+                             * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij))
     GT = reverse_gradients(model.indptr, model.indices, G)
     return Discretisation(model.X, model.V, model.m, model.re, "wls", model.indptr,
                           model.indices, G, GT, np.broadcast_to(np.eye(d), (N, d, d)).copy(),

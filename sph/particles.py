@@ -181,7 +181,8 @@ def box(lo, hi, dx: float, mode: str = "cell") -> tuple[np.ndarray, np.ndarray]:
     b = Box(tuple(lo), tuple(hi))
     X, _ = lattice_points(np.asarray(lo, float), np.asarray(hi, float), dx, mode)
     X = np.ascontiguousarray(X[b.contains(X, TOL * dx)])
-    V, _ = boundary_normals(X, dx, lambda q: b.contains(q, 0.0), origin=np.asarray(lo, float))
+    origin = np.asarray(lo, float) + (0.5 * dx if mode == "cell" else 0.0)  # a lattice point
+    V, _ = boundary_normals(X, dx, lambda q: b.contains(q, 0.0), origin=origin)
     return X, V
 
 
@@ -270,7 +271,8 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
         X, K = P[keep], K[keep]
         if len(X) == 0:
             raise SceneError(f"regions: no lattice point at spacing {dx:g} m lies in the body")
-        V, nrm = boundary_normals(X, dx, lambda q: body.contains(q, 0.0), origin=lo)
+        V, nrm = boundary_normals(X, dx, lambda q: body.contains(q, 0.0),
+                                  origin=lo + (0.5 * dx if mode == "cell" else 0.0))
         reg = _assign_regions(model, lat, X, tol)
         Xs.append(X); Vs.append(V); Ns.append(nrm); regs.append(reg)
         kmax = K.max(axis=0)
