@@ -1,13 +1,14 @@
 """scikit-fem total-Lagrangian finite-strain reference solver (the ``fem`` solver of scenes.md).
 
-``solve(scene, resolution, **options) -> dict`` dispatches on the scene type:
+``solve_model(scene, resolution, drive=None, element=None, fbar=None, deletion=False, fields=None,
+**options) -> dict`` (:mod:`fem_reference.model`) reads any scene model
+(:class:`workbench.scenes.model.Model`: regions, sets, constraints, loads, drive, observables) —
+the FEM's counterpart of the particle methods' :func:`sph.driver.solve`, with the same result keys;
+``resolution`` is the number of elements across ``model.length``.
 
-- :class:`workbench.scenes.SSCurve` → :func:`fem_reference.drivers.solve_ss_curve`
-  (resolution = hexahedra per edge);
-- :class:`workbench.scenes.Cantilever` → :func:`fem_reference.drivers.solve_cantilever`
-  (resolution = biquadratic quadrilaterals across H);
-- :class:`workbench.scenes.Plate` → :func:`fem_reference.drivers.solve_plate`
-  (resolution = biquadratic quadrilaterals across H; ``dynamic=False`` for the modal period only).
+``solve(scene, resolution, **options) -> dict`` runs every scene, the headline ones included,
+through it (:func:`fem_reference.model.solve`; the plate study's ``dynamic`` option: False for
+the modal periods only, True for the Newmark run with ``period`` the modal one).
 
 ``reference(scene, quantity)`` returns a converged value from the on-disk cache
 (:mod:`fem_reference.cache`), computing it once.
@@ -21,8 +22,10 @@ with a density per element, F-bar, element deletion; scikit-fem bases, forms and
 parameter or time) → :mod:`.static` (the :class:`~.static.Problem`: materials per element,
 Newton, line search, load stepping, deletion of failed elements), :mod:`.modal` (shift-invert
 eigenpairs), :mod:`.dynamic` (Newmark) → :mod:`.observe` (reactions, displacement at any point,
-energies, mean stress, failed fraction) → :mod:`.drivers` (the scenes, the 3-D cantilever, the
-thick tube, the micro-cantilever) → :mod:`.cache`; :mod:`.bench` times it.
+energies, mean stress, failed fraction) → :mod:`.model` (the reader of scene models: mesh, sets,
+constraints, loads, drive, observables) → :mod:`.cache`; :mod:`.drivers` holds the problems that are
+not scenes (the thick tube with its curved mesh, the micro-cantilever with its loaded patch);
+:mod:`.bench` times it.
 
 Elements: biquadratic 9-node quadrilaterals (3×3 Gauss) in 2-D, free of shear locking; trilinear
 hexahedra (2×2×2 Gauss) for homogeneous 3-D states (the ss-curve block), triquadratic 27-node
@@ -52,22 +55,4 @@ function of it.
 from __future__ import annotations
 
 from .cache import reference  # noqa: F401
-
-
-def solve(scene, resolution: int, **options) -> dict:
-    """Run the FEM on ``scene`` at ``resolution``; see the module docstring for the result keys."""
-    from workbench.scenes import Cantilever, Plate, SSCurve
-
-    from . import drivers
-
-    if not isinstance(scene, Plate):  # only the plate's dynamic run writes mesh fields
-        options.pop("fields", None)
-        options.pop("field_frames", None)
-    if isinstance(scene, SSCurve):
-        return drivers.solve_ss_curve(scene, resolution, **options)
-    if isinstance(scene, Cantilever):
-        return drivers.solve_cantilever(scene, resolution, **options)
-    if isinstance(scene, Plate):
-        return drivers.solve_plate(scene, resolution, **options)
-    raise ValueError(f"scene: {type(scene).__name__} has no FEM driver "
-                     "(SSCurve, Cantilever, Plate)")
+from .model import solve, solve_model  # noqa: F401

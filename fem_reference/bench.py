@@ -26,12 +26,12 @@ import numpy as np
 def newton_iteration_cost(resolutions) -> list[dict]:
     from workbench.scenes import Cantilever
 
-    from .drivers import cantilever_problem
+    from .model import build
     from .static import linear_solve
 
     rows = []
     for n in resolutions:
-        problem, _ = cantilever_problem(Cantilever(), n)
+        problem = build(Cantilever(), n).problem
         disc = problem.disc
         st = problem.initial_state()
         u = np.zeros(disc.N)
@@ -59,7 +59,7 @@ def newton_iteration_cost(resolutions) -> list[dict]:
 def plate_modal_to_tolerance(tol: float = 1e-3) -> dict:
     from workbench.scenes import Plate
 
-    from . import solve
+    from .model import solve
 
     t0 = time.perf_counter()
     ns, T, times = [], [], []
@@ -85,7 +85,7 @@ def large_cantilever(resolution: int) -> dict:
     from workbench import analytic
     from workbench.scenes import Cantilever
 
-    from . import solve
+    from .model import solve
 
     sc = Cantilever()
     t0 = time.perf_counter()
@@ -108,7 +108,7 @@ def main(argv=None) -> None:
           f"load average {os.getloadavg()[0]:.1f} at start")
     from workbench.scenes import Cantilever
 
-    from . import solve
+    from .model import solve
 
     solve(dataclasses.replace(Cantilever(), loads=(0.5,)), 1)  # warm numba's cache
 

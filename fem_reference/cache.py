@@ -33,6 +33,9 @@ QUANTITIES = {
     "Cantilever": ("load", "tip_deflection", "tip_horizontal"),
     "Plate": ("period", "omega", "period_dynamic", "amplitude", "time", "tip_displacement"),
 }
+# Options of a scene type's references: the SS-curve block's homogeneous state needs no more than
+# trilinear hexahedra (the study's choice too).
+DEFAULT_OPTIONS = {"SSCurve": {"element": "hex8"}}
 DYNAMIC_QUANTITIES = ("period_dynamic", "amplitude", "time", "tip_displacement")
 
 
@@ -101,9 +104,10 @@ def record(scene, resolution: int | None = None, refresh: bool = False, **option
     storing it when absent (or with ``refresh``). Returns the stored dict: ``result`` (the
     solver's output, arrays as lists, NaN as None), ``scene``, ``params``, ``resolution``,
     ``options``, ``code``, ``created``, ``key``."""
-    from . import solve
+    from .model import solve
 
     name = type(scene).__name__
+    options = {**DEFAULT_OPTIONS.get(name, {}), **options}
     if resolution is None:
         resolution = DEFAULT_RESOLUTION[name + ("/dynamic" if options.get("dynamic") else "")]
     key, desc = record_key(scene, resolution, options)

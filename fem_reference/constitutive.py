@@ -93,42 +93,16 @@ def update(material, H: np.ndarray, history: np.ndarray | None, plane: str | Non
     return out
 
 
-N_GAUSS_ENERGY = 6  # Gauss–Legendre points of the path integral (exact for SVK from 2)
-
-
 def stored_energy_density(material, F: np.ndarray, history: np.ndarray | None = None,
                           mat_id=None) -> np.ndarray:
-    """Stored energy density ψ(F) per point, J/m³, shape (N,), from the material library.
+    """Stored energy density ψ(F, h) per point, J/m³, shape (N,): the library's closed forms
+    (:func:`workbench.materials.energies`, every law, J2 and the mortar included; ψ of a failed
+    J2 point as the library defines it).
 
-    F: (N, 3, 3) (:func:`embed` of the points' H and F33). With the library's closed-form
-    ``workbench.materials.stored_energies(F, h, prm_table, mat_id)`` (when present) every law,
-    J2 included, is answered. Until then the hyperelastic laws integrate the library's own stress
-    along the straight path F(s) = I + s (F − I), ψ(F) = ∫₀¹ P(F(s)) : (F − I) ds (exact for a
-    hyperelastic law, P = ∂ψ/∂F, ψ(I) = 0), by Gauss–Legendre with ``N_GAUSS_ENERGY`` points —
-    exact for Saint Venant–Kirchhoff (a cubic integrand), converged to round-off for the others at
-    the strains of the scenes — and points of a J2 material, whose stored energy depends on the
-    plastic history, are NaN. (The particle methods' diagnostics do the same; the solver packages
-    do not import each other.)
+    F: (N, 3, 3) (:func:`embed` of the points' H and F33); history: (N, n_history) of the end of
+    the step (None: virgin); ``material`` a Material or a MaterialTable with ``mat_id`` (N,).
     """
-    import workbench.materials as wm
+    from workbench.materials import energies
 
-    table = MaterialTable.of(material)
-    F = np.ascontiguousarray(F, dtype=float)
-    mat_id = (np.zeros(len(F), np.int64) if mat_id is None
-              else np.ascontiguousarray(np.broadcast_to(mat_id, (len(F),)), dtype=np.int64))
-    if hasattr(wm, "stored_energies"):
-        h = table.initial_history(mat_id) if history is None else history
-        return np.asarray(wm.stored_energies(F, h, table.params(), mat_id), dtype=float)
-    out = np.full(len(F), np.nan)
-    elastic = np.array([m.law != "j2" for m in table.materials])[mat_id]
-    if not elastic.any():
-        return out
-    Fe, ids = F[elastic], mat_id[elastic]
-    H = Fe - np.eye(3)
-    x, w = np.polynomial.legendre.leggauss(N_GAUSS_ENERGY)
-    psi = np.zeros(len(Fe))
-    for s, ws in zip(0.5 * (x + 1.0), 0.5 * w):
-        P, _, _, _ = points_3d(table, np.eye(3) + s * H, None, False, ids)
-        psi += ws * np.einsum("nij,nij->n", P, H)
-    out[elastic] = psi
-    return out
+    return np.asarray(energies(MaterialTable.of(material), np.ascontiguousarray(F, dtype=float),
+                               history, mat_id)["psi"], dtype=float).reshape(-1)

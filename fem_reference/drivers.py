@@ -1,226 +1,26 @@
-"""The three headline scenes on the FEM: discretise, drive, measure (scenes.md, contract.md).
+"""FEM problems that are not scene models (the scenes, the headline ones included, run through
+:mod:`fem_reference.model`):
 
-- :func:`solve_ss_curve`: 3-D block, trilinear hexahedra, rollers on X=0, Y=0, Z=0, prescribed
-  axial displacement of X=a following ``scene.strain_path()``, J2 history at the points.
-- :func:`solve_cantilever`: 2-D, biquadratic quadrilaterals, rigid clamp at X=0, uniform dead shear
-  traction −P/H on X=L, load stepping through ``scene.loads``.
-- :func:`solve_plate`: 2-D plane strain, biquadratic quadrilaterals, rigid clamp at X=0; modal
-  period and a Newmark run from the initial velocity of 004 eq. 13.
+- :func:`micro_cantilever_problem`, :func:`solve_micro_cantilever`: the micro-cantilever of 000 on
+  its block, 27-node hexahedra with F-bar, J2 with damage and element deletion, the beam pushed
+  down by a rigid (or frictionless) patch — a loaded patch of a face, and grains given per element;
+- :func:`cylinder_problem`, :func:`solve_cylinder`: the thick-walled cylinder of the locking tests
+  on a quarter ring with quadratic (curved) geometry, which a structured box mesh cannot give;
+- :func:`solve_plate`: the plate through :func:`fem_reference.model.solve` under its old name.
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
 from .assembly import Discretisation
-from .dynamic import newmark
-from .mesh import block, quarter_ring, rectangle
-from .modal import lowest_modes
-from .static import Problem, TangentSolver, load_path
+from .mesh import quarter_ring
+from .static import Problem, load_path
 
 
 def _error_status(err: Exception) -> str:
     return f"error: {type(err).__name__}: {err}".replace("\n", " ")
-
-
-# ------------------------------------------------------------------------------------------------
-# SS curve
-# ------------------------------------------------------------------------------------------------
-
-def solve_ss_curve(scene, resolution: int = 2, rtol: float = 1e-9, maxit: int = 25) -> dict:
-    """Uniaxial tension of the block [0, a]³ with ``resolution`` elements per edge.
-
-    Returns dict(strain (log axial strain per step), stress (axial Cauchy stress = reaction over
-    the current cross-section, Pa), stress_qp (the mean σ_xx over the points, Pa), nominal_stress
-    (reaction over a², Pa), eps_p (mean equivalent plastic strain), wall_time, n_dof, n_elements,
-    status, residual_history (per step: the relative residual norms of each increment)).
-    """
-    t0 = time.perf_counter()
-    a = scene.size
-    material = scene.material
-    disc = Discretisation(block(a, resolution))
-    tol = 1e-9 * a
-    x0 = disc.dofs_on(lambda x: x[0] < tol, 0)
-    y0 = disc.dofs_on(lambda x: x[1] < tol, 1)
-    z0 = disc.dofs_on(lambda x: x[2] < tol, 2)
-    xa = disc.dofs_on(lambda x: x[0] > a - tol, 0)
-    disc.set_fixed(np.concatenate([x0, y0, z0, xa]))
-    pos_xa = np.searchsorted(disc.fixed, xa)
-
-    def fixed_values(eps):
-        g = np.zeros(len(disc.fixed))
-        g[pos_xa] = a * math.expm1(eps)
-        return g
-
-    problem = Problem(disc, material, None, fixed_values, lambda lam: np.zeros(disc.N))
-    corner_y = disc.node_dof(np.array([a, a, a]), 1)
-    corner_z = disc.node_dof(np.array([a, a, a]), 2)
-    path = np.asarray(scene.strain_path(), dtype=float)
-    n = len(path)
-    out = dict(strain=path, stress=np.full(n, np.nan), stress_qp=np.full(n, np.nan),
-               nominal_stress=np.full(n, np.nan), eps_p=np.full(n, np.nan), n_dof=int(disc.N),
-               n_elements=int(disc.nel), status="ok", residual_history=[[] for _ in range(n)])
-
-    def measure(k, lam, state):
-        pt = problem.evaluate(state.u, state, tangent=False)
-        R = float(np.sum(pt["f_int"][xa]))
-        area = (a + state.u[corner_y]) * (a + state.u[corner_z])
-        out["nominal_stress"][k] = R / a ** 2
-        out["stress"][k] = R / area
-        P = pt["P"]
-        H = disc.displacement_gradient(state.u)
-        F = H + np.eye(3)
-        sigma = np.einsum("nij,nkj->nik", P, F) / np.linalg.det(F)[:, None, None]
-        out["stress_qp"][k] = float(np.mean(sigma[:, 0, 0]))
-        if material.n_history:
-            from workbench.materials import HIST_EPS_P
-            out["eps_p"][k] = float(np.mean(state.history[:, HIST_EPS_P]))
-        else:
-            out["eps_p"][k] = 0.0
-
-    try:
-        recs, _ = load_path(problem, path, rtol=rtol, maxit=maxit, callback=measure)
-        for k, r in enumerate(recs):
-            out["residual_history"][k] = r["residual_history"]
-        bad = [r["status"] for r in recs if r["status"] != "ok"]
-        out["status"] = "ok" if not bad else "diverged: " + bad[0]
-    except Exception as err:  # a failed run is a result (contract.md)
-        out["status"] = _error_status(err)
-    out["wall_time"] = time.perf_counter() - t0
-    return out
-
-
-# ------------------------------------------------------------------------------------------------
-# Cantilever
-# ------------------------------------------------------------------------------------------------
-
-def cantilever_problem(scene, resolution: int, aspect: float = 1.0, element=None,
-                       tip_load: str = "traction", fbar=None):
-    """The discretised cantilever: (problem, tip DOFs (x, y)); λ is the dimensionless load.
-    ``element``: (scalar element, quadrature order) other than the default Q2 (for tests).
-    ``tip_load``: 'traction' (the scene's uniform dead shear traction on X = L) or 'point' (the
-    same total force as a point load on the tip mid-node (L, 0)). ``fbar``: see
-    :class:`fem_reference.assembly.Discretisation` (plane strain only)."""
-    L, H = scene.L, scene.H
-    disc = Discretisation(rectangle(L, H, resolution, aspect), element=element, fbar=fbar)
-    disc.set_fixed(disc.dofs_on(lambda x: x[0] < 1e-9 * L))
-    tip = np.array([L, 0.0])
-    point_loads = ()
-    if tip_load == "traction":
-        f_unit = disc.traction_load(lambda x: x[0] > L * (1 - 1e-9),
-                                    np.array([0.0, -scene.force(1.0) / H]))
-    elif tip_load == "point":
-        f_unit = np.zeros(disc.N)
-        point_loads = ((tip, np.array([0.0, -scene.force(1.0)])),)
-    else:
-        raise ValueError(f"tip_load: {tip_load!r} is not one of 'traction', 'point'")
-    problem = Problem(disc, scene.material, scene.plane, lambda lam: np.zeros(len(disc.fixed)),
-                      lambda lam: lam * f_unit, point_loads=point_loads)
-    return problem, (disc.node_dof(tip, 0), disc.node_dof(tip, 1))
-
-
-def solve_cantilever(scene, resolution: int = 4, max_increment: float = 3.0, rtol: float = 1e-9,
-                     maxit: int = 25, aspect: float = 1.0, element=None, tip_load: str = "traction",
-                     fbar=None) -> dict:
-    """Static tip-loaded cantilever with ``resolution`` elements across H (elements about square).
-
-    Returns dict(load (dimensionless P L²/(E I)), force (N/m), tip_deflection (m, positive
-    downward), tip_horizontal (m, shortening positive), wall_time (cumulative s to reach each load),
-    n_dof, n_elements, status (per load), residual_history (per load, per increment),
-    newton_iterations (per load), assembly_time, solve_time (per load, s)).
-    """
-    t0 = time.perf_counter()
-    loads = np.asarray(scene.loads, dtype=float)
-    n = len(loads)
-    problem, (ix, iy) = cantilever_problem(scene, resolution, aspect, element, tip_load, fbar)
-    disc = problem.disc
-    out = dict(load=loads, force=np.array([scene.force(p) for p in loads]),
-               tip_deflection=np.full(n, np.nan), tip_horizontal=np.full(n, np.nan),
-               wall_time=np.full(n, np.nan), n_dof=int(disc.N), n_elements=int(disc.nel),
-               status=["error: not run"] * n, residual_history=[[] for _ in range(n)],
-               newton_iterations=[[] for _ in range(n)], assembly_time=np.full(n, np.nan),
-               solve_time=np.full(n, np.nan))
-    setup = time.perf_counter() - t0
-
-    def measure(k, lam, state):
-        out["tip_deflection"][k] = -state.u[iy]
-        out["tip_horizontal"][k] = -state.u[ix]
-
-    try:
-        solver = TangentSolver()
-        recs, _ = load_path(problem, loads, max_increment=max_increment, rtol=rtol, maxit=maxit,
-                            callback=measure, solver=solver)
-        out["factorisations"] = solver.factorisations
-        out["krylov_iterations"] = solver.krylov_iterations
-        for k, r in enumerate(recs):
-            out["status"][k] = r["status"]
-            out["residual_history"][k] = r["residual_history"]
-            out["newton_iterations"][k] = r["newton_iterations"]
-            out["wall_time"][k] = setup + r["wall_time"]
-            out["assembly_time"][k] = r["assembly_time"]
-            out["solve_time"][k] = r["solve_time"]
-    except Exception as err:  # a failed run is a result (contract.md)
-        out["status"] = [_error_status(err)] * n
-    return out
-
-
-# ------------------------------------------------------------------------------------------------
-# 3-D cantilever (rectangular section, tip load)
-# ------------------------------------------------------------------------------------------------
-
-def cantilever_3d_problem(material, L: float, B: float, H: float, n_H: int, order: int = 2,
-                          fbar=None):
-    """A 3-D cantilever 0 ≤ X ≤ L, |Y| ≤ B/2, |Z| ≤ H/2, clamped on X = 0 (all components), a
-    uniform dead shear traction on X = L in −Z with total force λ (N): λ is the tip load.
-    ``n_H`` elements across H, elements about cubic; ``order`` 2: 27-node hexahedra (3×3×3
-    Gauss), 1: 8-node (2×2×2). Returns (problem, tip point (L, 0, 0))."""
-    from .boundary import Constraints, Loads
-    from .mesh import box
-
-    h = H / n_H
-    n = (max(1, int(round(L / h))), max(1, int(round(B / h))), n_H)
-    disc = Discretisation(box((0.0, -B / 2, -H / 2), (L, B / 2, H / 2), n), order=order, fbar=fbar)
-    bc = Constraints(disc)
-    bc.clamp(lambda x: x[0] < 1e-9 * L)
-    bc.apply()
-    loads = Loads(disc)
-    loads.traction(lambda x: x[0] > L * (1 - 1e-9), np.array([0.0, 0.0, -1.0 / (B * H)]))
-    return Problem(disc, material, None, bc.values, loads), np.array([L, 0.0, 0.0])
-
-
-def solve_cantilever_3d(material, L: float, B: float, H: float, loads, n_H: int, order: int = 2,
-                        fbar=None, max_increment: float = np.inf, rtol: float = 1e-9) -> dict:
-    """Follow the tip loads ``loads`` (N) of :func:`cantilever_3d_problem`. Returns dict(load (N),
-    tip_deflection (m, −u_Z at (L, 0, 0), interpolated), n_dof, n_elements, status (per load),
-    wall_time (s), assembly_time, solve_time (s, per load), newton_iterations)."""
-    t0 = time.perf_counter()
-    loads = np.asarray(loads, dtype=float)
-    n = len(loads)
-    problem, tip = cantilever_3d_problem(material, L, B, H, n_H, order, fbar)
-    disc = problem.disc
-    probe = disc.probe(tip[None, :])
-    out = dict(load=loads, tip_deflection=np.full(n, np.nan), n_dof=int(disc.N),
-               n_elements=int(disc.nel), status=["error: not run"] * n,
-               assembly_time=np.full(n, np.nan), solve_time=np.full(n, np.nan),
-               newton_iterations=[[] for _ in range(n)])
-
-    def measure(k, lam, state):
-        out["tip_deflection"][k] = -(probe @ state.u)[2]
-
-    try:
-        recs, _ = load_path(problem, loads, max_increment=max_increment, rtol=rtol,
-                            callback=measure)
-        for k, r in enumerate(recs):
-            out["status"][k] = r["status"]
-            out["assembly_time"][k] = r["assembly_time"]
-            out["solve_time"][k] = r["solve_time"]
-            out["newton_iterations"][k] = r["newton_iterations"]
-    except Exception as err:  # a failed run is a result (contract.md)
-        out["status"] = [_error_status(err)] * n
-    out["wall_time"] = time.perf_counter() - t0
-    return out
 
 
 # ------------------------------------------------------------------------------------------------
@@ -432,106 +232,12 @@ def solve_cylinder(material, a: float, b: float, n_r: int, n_theta: int, loads,
 
 
 # ------------------------------------------------------------------------------------------------
-# Plate
+# Plate (the interface of an older test)
 # ------------------------------------------------------------------------------------------------
 
-def initial_velocity(scene, X):
-    """v_y(X) = V_f c0 f(X)/f(L) (004 eq. 13 with Gray et al.'s f), from workbench.analytic."""
-    from workbench.analytic import plate_initial_velocity
+def solve_plate(scene, resolution: int = 4, dynamic: bool = True, **options) -> dict:
+    """The plate through :func:`fem_reference.model.solve` (``dynamic``: the modal period alone,
+    or with the Newmark run). Kept for tests/test_fields_output.py, which calls it by this name."""
+    from .model import solve
 
-    return np.asarray(plate_initial_velocity(scene, np.asarray(X, dtype=float)), dtype=float)
-
-
-def plate_problem(scene, resolution: int, aspect: float = 1.0):
-    L, H = scene.L, scene.H
-    disc = Discretisation(rectangle(L, H, resolution, aspect))
-    disc.set_fixed(disc.dofs_on(lambda x: x[0] < 1e-9 * L))
-    problem = Problem(disc, scene.material, "strain", lambda lam: np.zeros(len(disc.fixed)),
-                      lambda lam: np.zeros(disc.N))
-    return problem, disc.node_dof(np.array([L, 0.0]), 1)
-
-
-def period_from_history(t: np.ndarray, y: np.ndarray) -> float:
-    """Period from the zero crossings of y(t) (linear interpolation), least-squares fit of the
-    crossing times against their index (half periods); NaN with fewer than two crossings."""
-    t1, y1 = t[1:], y[1:]  # t = 0 is the rest position itself
-    i = np.flatnonzero(np.sign(y1[:-1]) * np.sign(y1[1:]) < 0)
-    tc = t1[i] - y1[i] * (t1[i + 1] - t1[i]) / (y1[i + 1] - y1[i])
-    if len(tc) < 2:
-        return float("nan")
-    slope = np.polyfit(np.arange(len(tc)), tc, 1)[0]
-    return float(2 * slope)
-
-
-def mesh_snapshots(folder, name: str, disc, n_steps: int, frames: int):
-    """``snapshot(step, t, u, v)`` for :func:`fem_reference.dynamic.newmark` writing the mesh fields
-    (vertex ``displacement`` and ``velocity``, m and m/s) as the ParaView series ``name`` (.pvd +
-    .vtu) in ``folder``: about ``frames`` frames over ``n_steps`` steps, the last step always."""
-    from workbench.fields import FieldSeries, check_frames
-
-    from .mesh import vtk_grid
-
-    every = max(1, -(-int(n_steps) // check_frames(frames)))
-    series = FieldSeries(folder, name)
-    grid = vtk_grid(disc.basis.mesh)
-    nodal = disc.basis.nodal_dofs  # (d, n_vertices): the vertex DOFs of each component
-
-    def snapshot(step, t, u, v):
-        if step % every == 0 or step == n_steps:
-            series.add(t, grid=grid, displacement=u[nodal].T, velocity=v[nodal].T)
-
-    return snapshot
-
-
-def solve_plate(scene, resolution: int = 4, dynamic: bool = True, steps_per_period: int = 100,
-                periods: float | None = None, aspect: float = 1.0, rtol: float = 1e-9,
-                fields=None, field_frames: int = 20) -> dict:
-    """Modal period and (``dynamic``) a Newmark run of the plate, ``resolution`` elements across H.
-
-    Returns dict(period (modal, s), omega (three lowest, rad/s), period_dynamic (s, from the
-    zero crossings of the tip displacement), amplitude (max |tip displacement|, m), time,
-    tip_displacement (m, +Y), kinetic_energy, strain_energy (J per unit thickness; NaN for a law
-    other than SVK), dt, wall_time (s), wall_time_modal (s), n_dof, n_elements, status,
-    newton_iterations). The time step is T_modal/``steps_per_period`` (an implicit scheme: the
-    scene's ``dt_factor``, a CFL factor of the explicit particle methods, does not apply).
-    ``fields`` (a folder, or None): the dynamic run writes its mesh fields (vertex displacement
-    and velocity) as the ParaView series ``plate_fem_H<resolution>.pvd``, about ``field_frames``
-    frames (:func:`mesh_snapshots`); a modal-only run writes none.
-    """
-    t0 = time.perf_counter()
-    problem, iy = plate_problem(scene, resolution, aspect)
-    disc = problem.disc
-    out = dict(period=np.nan, omega=np.full(3, np.nan), period_dynamic=np.nan, amplitude=np.nan,
-               time=np.zeros(0), tip_displacement=np.zeros(0), kinetic_energy=np.zeros(0),
-               strain_energy=np.zeros(0), dt=np.nan, n_dof=int(disc.N), n_elements=int(disc.nel),
-               status="ok", newton_iterations=[], wall_time_modal=np.nan)
-    try:
-        omega, _ = lowest_modes(problem, k=3)
-        out["omega"] = omega
-        out["period"] = float(2 * math.pi / omega[0])
-        out["wall_time_modal"] = time.perf_counter() - t0
-        if dynamic:
-            T = out["period"]
-            dt = T / steps_per_period
-            n_steps = int(math.ceil((scene.periods if periods is None else periods) * T / dt))
-            X = disc.basis.doflocs[0]
-            v0 = np.zeros(disc.N)
-            ydofs = np.arange(1, disc.N, 2)
-            v0[ydofs] = initial_velocity(scene, X[ydofs])
-            snap = None
-            if fields is not None:
-                from workbench.fields import series_name
-
-                snap = mesh_snapshots(fields, series_name(scene.name, "fem", resolution), disc,
-                                      n_steps, field_frames)
-            run = newmark(problem, v0, dt, n_steps, observe=lambda u: u[iy], rtol=rtol,
-                          snapshot=snap)
-            out.update(time=run["time"], tip_displacement=run["observed"],
-                       kinetic_energy=run["kinetic_energy"], strain_energy=run["strain_energy"],
-                       dt=dt, status=run["status"], newton_iterations=run["newton_iterations"])
-            out["period_dynamic"] = period_from_history(run["time"], run["observed"])
-            out["amplitude"] = float(np.max(np.abs(run["observed"])))
-    except Exception as err:  # a failed run is a result (contract.md)
-        out["status"] = _error_status(err)
-    out["wall_time"] = time.perf_counter() - t0
-    return out
+    return solve(scene, resolution, dynamic=dynamic, **options)

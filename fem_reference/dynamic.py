@@ -5,7 +5,8 @@ rule), unconditionally stable and energy-conserving for linear problems, second-
     u_{n+1} = u_n + Δt v_n + Δt²/4 (a_n + a_{n+1}),    v_{n+1} = v_n + Δt/2 (a_n + a_{n+1}),
 
 solved for u_{n+1} by Newton with the effective tangent K + 4/Δt² M (Hughes, *The finite element
-method*, §9.1). The load parameter of the :class:`~fem_reference.static.Problem` is the time: the
+method*, §9.1). Mass-proportional damping C = c M (``damping`` c, 1/s) adds C v_{n+1} to the
+balance, v_{n+1} = 2(u_{n+1} − u_n)/Δt − v_n, and 2c/Δt M to the tangent. The load parameter of the :class:`~fem_reference.static.Problem` is the time: the
 Dirichlet values and f_ext are evaluated at t_{n+1}. M is the consistent mass with each element's
 density; the history (J2) is committed at every converged step, and with ``problem.deletion``
 failed elements are deleted after it (M is then rebuilt without them). Kinetic energy ½vᵀMv and
@@ -21,7 +22,8 @@ from .static import Problem, TangentSolver, commit, newton
 
 
 def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
-            rtol: float = 1e-10, maxit: int = 20, snapshot=None, callback=None):
+            rtol: float = 1e-10, maxit: int = 20, snapshot=None, callback=None,
+            damping: float = 0.0):
     """Advance from u = 0 (the prescribed values of the fixed DOFs at t = 0) with initial velocity
     v0 (N,) for ``n_steps`` steps of ``dt``. On the fixed DOFs v0 must be the rate of the
     prescribed motion at t = 0 (zero on a clamp): the consistent mass couples their acceleration
@@ -31,9 +33,11 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     ``snapshot(step, t, u, v)`` (optional) is called at the start and after every step (field
     output; it decides which steps it writes); ``callback(step, t, state, v)`` (optional) too, with
     the committed :class:`~fem_reference.static.State`.
-    The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) on the free DOFs.
-    Returns dict(time, observed, kinetic_energy, strain_energy (stored energy, J; NaN where the
-    material library has none), status, newton_iterations, deleted (elements, in order)).
+    The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) − c M v₀ on the free DOFs
+    (``damping`` c, 1/s: mass-proportional damping, module docstring).
+    Returns dict(time, observed, kinetic_energy, strain_energy (stored energy of the live
+    points, J: the library's closed forms), status, newton_iterations, deleted (elements, in
+    order)).
     """
     disc = problem.disc
     M_full = problem.mass()
@@ -44,6 +48,8 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     a = np.zeros(disc.N)
     pt0 = problem.evaluate(u, state, tangent=False)
     r0 = problem.external(0.0) - pt0["f_int"]
+    if damping:
+        r0 = r0 - damping * (M_full @ v)
     if np.any(r0[disc.free] != 0):
         M_ff = M_full[disc.free][:, disc.free].tocsc()
         a[disc.free] = spla.splu(M_ff).solve(r0[disc.free])
@@ -67,13 +73,17 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         # a_{n+1}(u) = c (u − u_n − Δt v_n) − a_n; residual f_int(u) + M a_{n+1}(u) − f_ext
         base = u + dt * v
 
-        def inertia(x, base=base, a=a):
-            return M_full @ (c * (x - base) - a)
+        def inertia(x, base=base, a=a, u_n=u, v_n=v):
+            f = M_full @ (c * (x - base) - a)
+            if damping:  # C v_{n+1}, v_{n+1} = 2 (x − u_n)/Δt − v_n
+                f = f + damping * (M_full @ (2.0 / dt * (x - u_n) - v_n))
+            return f
 
         u0 = u + dt * v
         u0[disc.fixed] = problem.prescribed(tn)
         res = newton(problem, state, u0, tn, rtol=rtol, maxit=maxit,
-                     extra_matrix=c * M_ff, extra_rhs=inertia, solver=solver)
+                     extra_matrix=(c + 2.0 * damping / dt) * M_ff, extra_rhs=inertia,
+                     solver=solver)
         if not res.converged:
             status = f"diverged at t={tn:.4g}: {res.reason}"
             break

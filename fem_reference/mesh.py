@@ -72,6 +72,11 @@ def box(lo, hi, n) -> skfem.MeshHex | skfem.MeshQuad:
     return _tensor(lines)
 
 
+def tensor_mesh(lines) -> skfem.MeshQuad | skfem.MeshHex:
+    """The tensor-product mesh of the grid ``lines`` (one increasing array per axis, 2 or 3)."""
+    return _tensor([np.asarray(ln, dtype=float) for ln in lines])
+
+
 def _tensor(lines):
     if len(lines) == 2:
         return skfem.MeshQuad.init_tensor(*lines)

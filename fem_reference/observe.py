@@ -55,12 +55,10 @@ def stored_energy(problem, state) -> float:
 def failed_elements(problem, state=None) -> np.ndarray:
     """bool (nel,): elements that failed — deleted, or (given ``state``) with D ≥ 1 at every
     point (a run without deletion)."""
-    from workbench.materials import HIST_DAMAGE
-
     disc = problem.disc
     failed = ~disc.active
-    if state is not None and problem.table.n_history > HIST_DAMAGE:
-        D = state.history[:, HIST_DAMAGE].reshape(disc.nel, disc.nqp)
+    if state is not None:
+        D = problem.damage(state).reshape(disc.nel, disc.nqp)
         failed = failed | np.all(D >= 1.0, axis=1)
     return failed
 

@@ -93,6 +93,9 @@ class Problem:
             raise ValueError(f"mat_id: values must lie in [0, {len(self.table)})")
         self.mat_id = mat_id.astype(np.int64)
         self.point_mat = np.repeat(self.mat_id, disc.nqp)
+        # the points whose history has the damage column (J2); other laws (the mortar) use that
+        # column for something else
+        self.point_j2 = np.array([m.law == "j2" for m in self.table.materials])[self.point_mat]
         self._f_point = None
         if len(self.point_loads):
             self._f_point = sum(disc.point_load(x, f) for x, f in self.point_loads)
@@ -103,7 +106,7 @@ class Problem:
         if self.deletion not in (False, None, "any", "all"):
             raise ValueError(f"deletion: {self.deletion!r} is not one of False, True, 'any', "
                              "'all'")
-        if self.deletion and self.table.n_history <= HIST_DAMAGE:
+        if self.deletion and not self.point_j2.any():
             raise ValueError("deletion: needs a damage history (a J2 material in the table)")
         self.dirichlet = disc.fixed.copy()  # the DOFs fixed_values() answers for
         self.held = np.zeros(0, dtype=np.int64)  # DOFs of deleted material, held in place
@@ -150,12 +153,15 @@ class Problem:
         n = self.disc.nel * self.disc.nqp
         return State(np.zeros(self.disc.N), self.table.initial_history(self.point_mat), np.ones(n))
 
+    def damage(self, state: State) -> np.ndarray:
+        """D (nel·nqp,) of the J2 law (000 eq. 36) in ``state``; 0 at the points of other laws."""
+        if not self.point_j2.any():
+            return np.zeros(len(self.point_j2))
+        return np.where(self.point_j2, state.history[:, HIST_DAMAGE], 0.0)
+
     def live_points(self, state: State) -> np.ndarray:
         """bool (nel·nqp,): points of active elements not failed (D < 1) in ``state``."""
-        live = np.repeat(self.disc.active, self.disc.nqp)
-        if self.table.n_history > HIST_DAMAGE:
-            live &= state.history[:, HIST_DAMAGE] < 1.0
-        return live
+        return np.repeat(self.disc.active, self.disc.nqp) & (self.damage(state) < 1.0)
 
     # -- the material update ---------------------------------------------------------------------
     def evaluate(self, u: np.ndarray, state: State, tangent: bool = True) -> dict:
@@ -236,7 +242,7 @@ class Problem:
 
     def stored_energy(self, state: State) -> float:
         """∫ ψ dV over the live points, J (J/m in 2-D) (:func:`~.constitutive.
-        stored_energy_density`; NaN where the library has no stored energy for a law)."""
+        stored_energy_density`, the library's closed forms)."""
         disc = self.disc
         live = self.live_points(state)
         F = embed(disc.displacement_gradient(state.u)[live], state.F33[live])
@@ -252,7 +258,7 @@ class Problem:
         disc = self.disc
         if not self.deletion:
             return np.zeros(0, dtype=np.int64)
-        D = state.history[:, HIST_DAMAGE].reshape(disc.nel, disc.nqp)
+        D = self.damage(state).reshape(disc.nel, disc.nqp)
         crit = np.all if self.deletion == "all" else np.any
         failed = np.flatnonzero(disc.active & crit(D >= 1.0, axis=1))
         if len(failed):

@@ -6,7 +6,8 @@ the part of the relative motion that the local affine map F_a does not explain:
 
     δ_ab = (x_b − x_a) − F_a (X_b − X_a),   Π_hg = ½ α μ Σ_a V_a Σ_b c_ab |δ_ab|²,
 
-with c_ab = w_ab / |X_ab|², w_ab = V_b W_ab / Σ_b V_b W_ab. δ vanishes for every linear field (the
+with c_ab = w_ab / |X_ab|², w_ab = V_b W_ab / Σ_b V_b W_ab (W: the kernel, or HPM's weight
+1 − r²/r_e² for its gradient). δ vanishes for every linear field (the
 patch test is kept) and is objective; Π_hg is a quadratic form of each coordinate column, so its
 force −K_s x is exact, constant-stiffness and momentum conserving.
 """
@@ -31,10 +32,14 @@ def hourglass_operator(disc) -> tuple[sp.csr_matrix, np.ndarray]:
     b_of = disc.indices.astype(np.int64)
     Xab = disc.X[b_of] - disc.X[a_of]
     r = np.linalg.norm(Xab, axis=1)
-    kind = kernel_code(disc.kernel)
-    Wab = np.array([kernel_w(float(q), disc.h, kind, d) for q in r]) * disc.V[b_of]
+    if disc.kernel == "wls":  # HPM's weight (004 eq. 6), r_e = disc.h
+        Wab = np.maximum(1.0 - (r / disc.h) ** 2, 0.0) * disc.V[b_of]
+    else:
+        kind = kernel_code(disc.kernel)
+        Wab = np.array([kernel_w(float(q), disc.h, kind, d) for q in r]) * disc.V[b_of]
     wsum = np.bincount(a_of, weights=Wab, minlength=N)
-    c = Wab / wsum[a_of] / (r * r)
+    ws = wsum[a_of]
+    c = np.divide(Wab, ws * r * r, out=np.zeros_like(Wab), where=ws > 0)  # V = 0 all round: no say
     # F_a X_ab = Σ_{c' in S_a} x_c' (g_ac' · X_ab), g_ab = G_ab, g_aa = −Σ_b G_ab
     rows, cols, vals = [np.arange(a_of.size)] * 2, [b_of, a_of], [np.ones(a_of.size), -np.ones(a_of.size)]
     nnz = a_of.size

@@ -61,7 +61,7 @@ class Particles:
     prescribed motion); clamped (N,) the particles held in every DOF at rest (held regions and
     clamps); domain (N,) the particles in the closed union of the non-held regions (the body's
     integration domain: a clamp is a face of it), ``domain_shape`` that union and ``origin`` the
-    lattice's anchor (None off the lattice)."""
+    lattice's first point (None off the lattice)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -181,7 +181,7 @@ def box(lo, hi, dx: float, mode: str = "cell") -> tuple[np.ndarray, np.ndarray]:
     b = Box(tuple(lo), tuple(hi))
     X, _ = lattice_points(np.asarray(lo, float), np.asarray(hi, float), dx, mode)
     X = np.ascontiguousarray(X[b.contains(X, TOL * dx)])
-    origin = np.asarray(lo, float) + (0.5 * dx if mode == "cell" else 0.0)  # a lattice point
+    origin = np.asarray(lo, float) + (0.5 * dx if mode == "cell" else 0.0)
     V, _ = boundary_normals(X, dx, lambda q: b.contains(q, 0.0), origin=origin)
     return X, V
 
@@ -271,8 +271,8 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
         X, K = P[keep], K[keep]
         if len(X) == 0:
             raise SceneError(f"regions: no lattice point at spacing {dx:g} m lies in the body")
-        V, nrm = boundary_normals(X, dx, lambda q: body.contains(q, 0.0),
-                                  origin=lo + (0.5 * dx if mode == "cell" else 0.0))
+        first = lo + (0.5 * dx if mode == "cell" else 0.0)  # the lattice's first point
+        V, nrm = boundary_normals(X, dx, lambda q: body.contains(q, 0.0), origin=first)
         reg = _assign_regions(model, lat, X, tol)
         Xs.append(X); Vs.append(V); Ns.append(nrm); regs.append(reg)
         kmax = K.max(axis=0)
@@ -343,7 +343,8 @@ def _constraints(model: Model, ps: Particles, lat, tol: float, lo) -> None:
     conc = [model.regions.index(r) for r in model.regions if r.arrangement == "concentric" and not r.held]
     domain |= np.isin(ps.region, conc)
     ps.fixed, ps.clamped, ps.domain = fixed, clamped, domain
-    ps.origin = None if lo is None else np.asarray(lo, dtype=float)
+    ps.origin = (None if lo is None else np.asarray(lo, dtype=float)
+                 + (0.5 * ps.dx if ps.lattice == "cell" else 0.0))
 
 
 def _assign_regions(model: Model, lat, X, tol) -> np.ndarray:

@@ -88,6 +88,13 @@ class Gate:
         return cls(name, float(observed), float(tolerance), reason, ok)
 
     @classmethod
+    def at_least(cls, name: str, observed: float, bound: float, reason: str) -> "Gate":
+        """A lower bound (an observed order of convergence, say)."""
+        ok = bool(np.isfinite(observed) and observed >= bound)
+        return cls(name, float(observed), float(bound), reason, ok,
+                   shown=f"{observed:.4g} (at least {bound:.4g})")
+
+    @classmethod
     def expect(cls, name: str, observed: str, expected: str, reason: str) -> "Gate":
         """A qualitative gate: an observed outcome (e.g. 'stable', 'unstable') against the one the
         literature predicts; ``observed`` is 1 where they differ, 0 where they agree."""
@@ -125,11 +132,19 @@ def check_resolutions(resolutions) -> list[int]:
     return out
 
 
+def ladders(solvers, resolutions, study, quick: bool) -> tuple[list, dict]:
+    """The solvers that run and each one's :func:`ladder`: a solver whose ladder is empty (a
+    variant the quick ladder leaves out) is dropped; 'analytic' is kept (it has no ladder)."""
+    lads = {s: ladder(s, resolutions, study, quick) for s in solvers if s != "analytic"}
+    kept = [s for s in solvers if s == "analytic" or lads[s]]
+    return kept, {s: lads[s] for s in kept if s != "analytic"}
+
+
 def ladder(solver: str, resolutions, study, quick: bool) -> list[int]:
     """The resolutions ``solver`` runs at: ``resolutions`` may be None (the study's ladder, or its
     quick ladder), a list (every discrete solver but the FEM reference, which keeps its own), or a
     dict solver -> list."""
-    default = list((study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS)[solver])
+    default = list((study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS).get(solver, ()))
     if resolutions is None:
         return default
     if isinstance(resolutions, dict):

@@ -81,7 +81,7 @@ def cantilever(ds, outdir) -> Path:
     loads = ds["load"].values
     L = float(ds.attrs.get("param_L", 1.0))
     fine = np.geomspace(max(loads.min(), 1e-3), loads.max(), 60)
-    from .analytic import elastica_tip, plane_moduli
+    from workbench.analytic import elastica_tip, plane_moduli
 
     Ep, _ = plane_moduli(ds.attrs["param_E"], ds.attrs["param_nu"], ds.attrs.get("plane", "strain"))
     ax[0].plot(fine, [elastica_tip(p * ds.attrs["param_E"] / Ep)[0] for p in fine], "k-",

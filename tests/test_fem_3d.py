@@ -1,81 +1,14 @@
-"""3-D FEM: the 27-node hexahedron against Timoshenko beam theory (and the trilinear hexahedron's
-shear locking), F-bar in 3-D against volumetric locking on the thick-walled tube with
-plane-strain end constraints (Lamé; the von Mises limit pressure), and the consistent F-bar
-tangent with J2 by finite differences.
+"""3-D FEM: F-bar in 3-D against volumetric locking on the thick-walled tube with plane-strain end
+constraints (Lamé; the von Mises limit pressure), and the consistent F-bar tangent with J2 by
+finite differences. (The 27-node hexahedron against Timoshenko beam theory, and the trilinear
+hexahedron's shear locking, run on the 3-D cantilever scene: tests/test_fem_model.py.)
 """
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
-from fem_reference.drivers import cylinder_problem, solve_cantilever_3d, solve_cylinder
+from fem_reference.drivers import cylinder_problem, solve_cylinder
 from fem_reference.static import load_path, newton
 from workbench.materials import HIST_EPS_P, Material
-
-# ------------------------------------------------------------------------------------------------
-# cantilever of square section, L/H = 8, ν = 0.3, tip load P with P L²/(E I) = 1e-3
-# ------------------------------------------------------------------------------------------------
-
-E, NU = 1.0e5, 0.3
-H = B = 0.02
-L = 8 * H
-I_SEC = B * H ** 3 / 12
-P = 1e-3 * E * I_SEC / L ** 2
-EB = P * L ** 3 / (3 * E * I_SEC)
-KAPPA = 5 / 6
-SHEAR = P * L / (KAPPA * E / (2 * (1 + NU)) * B * H)
-TIMOSHENKO = EB + SHEAR  # the shear term is 1.22 % of the total here
-
-# Reference error of Timoshenko for this continuum problem. (i) κ: for a square section at ν = 0.3
-# Cowper's κ = 10(1 + ν)/(12 + 11ν) = 0.850 against 5/6: 2 % of the shear term, 2.4e-4 of δ.
-# (ii) The idealisation, far larger: the clamp of the continuum holds the whole root face (no
-# warping, no Poisson contraction there) and the tip load is a uniform traction, not the
-# Saint-Venant shear flow; both act over a length ~H and change the deflection by a fraction of
-# the shear term. The converged 3-D deflection must therefore lie within the shear term
-# (1.22 %) of Timoshenko. Measured: it lies 0.9 % below Timoshenko, 0.3 % above
-# Euler–Bernoulli (the full clamp removes most of the shear flexibility that beam theory
-# ascribes to the root).
-TOL_TIMOSHENKO = SHEAR / TIMOSHENKO
-# The ladder 1, 2, 3 elements across H: the clamped edges carry a stress singularity, so the
-# deflection converges at h^p with p below the smooth-solution rate (measured p ≈ 1.7); the band
-# is that of the 2-D cantilever test.
-ORDER_BAND = (1.0, 2.6)
-
-
-def _order(d1, d2, d3):
-    """p with (δ2 − δ1)/(δ3 − δ2) = (1 − 2^-p)/(2^-p − 3^-p) (h = H, H/2, H/3)."""
-    ratio = (d2 - d1) / (d3 - d2)
-    return brentq(lambda p: (1 - 2 ** -p) / (2 ** -p - 3 ** -p) - ratio, 0.1, 8.0)
-
-
-@pytest.fixture(scope="module")
-def ladder():
-    mat = Material.svk(E=E, nu=NU)
-    runs = {n: solve_cantilever_3d(mat, L, B, H, [P], n) for n in (1, 2, 3)}
-    for n, r in runs.items():
-        assert r["status"] == ["ok"], (n, r["status"])
-    return runs
-
-
-def test_hex27_cantilever_against_timoshenko(ladder):
-    d = {n: r["tip_deflection"][0] for n, r in ladder.items()}
-    p = _order(d[1], d[2], d[3])
-    assert ORDER_BAND[0] < p < ORDER_BAND[1], (p, d)
-    # the finest rung plus its Richardson estimate of the remaining discretisation error
-    limit = d[3] + (d[3] - d[2]) * 3 ** -p / (2 ** -p - 3 ** -p)
-    assert abs(limit / TIMOSHENKO - 1) < TOL_TIMOSHENKO, (limit / TIMOSHENKO - 1, d)
-    # and the rung itself: its discretisation error (measured 0.15 %) adds to the reference error
-    assert abs(d[3] / TIMOSHENKO - 1) < TOL_TIMOSHENKO, d[3] / TIMOSHENKO - 1
-
-
-def test_hex8_shear_locks(ladder):
-    """Trilinear hexahedra (2×2×2 Gauss) on 2 elements across H come out >10 % too stiff
-    (measured −13 %); the 27-node element on the same mesh is within 1 % of the converged
-    value."""
-    hex8 = solve_cantilever_3d(Material.svk(E=E, nu=NU), L, B, H, [P], 2, order=1)
-    fine = ladder[3]["tip_deflection"][0]
-    assert hex8["tip_deflection"][0] / fine < 0.9, hex8["tip_deflection"][0] / fine
-    assert abs(ladder[2]["tip_deflection"][0] / fine - 1) < 0.01
-
 
 # ------------------------------------------------------------------------------------------------
 # volumetric locking: the tube a = 1 ≤ R ≤ b = 2 with u_Z = 0 on both end faces (plane strain)

@@ -7,7 +7,7 @@ import pytest
 
 from fem_reference.assembly import Discretisation
 from fem_reference.constitutive import update
-from fem_reference.drivers import cantilever_problem
+from fem_reference.model import build
 from fem_reference.mesh import block, rectangle
 from fem_reference.static import newton
 from workbench.materials import Material
@@ -46,7 +46,7 @@ def test_newton_converges_quadratically():
     """From rest to P L²/(E I) = 0.5 in one step (a geometrically nonlinear step): once the
     relative residual is below 0.2, r_{k+1} ≤ C r_k² with C = 10 until the round-off floor
     (~1e-12 here: F = I + H stores H to ~1e-16/|H|), and the last iterate is below 1e-9."""
-    problem, _ = cantilever_problem(Cantilever(), 2)
+    problem = build(Cantilever(), 2).problem
     state = problem.initial_state()
     res = newton(problem, state, state.u.copy(), 0.5, rtol=1e-11, maxit=30)
     assert res.converged, res.reason
@@ -95,7 +95,8 @@ def test_reused_factors_give_the_same_path():
 
     out = []
     for reuse in (False, True):
-        problem, (_, iy) = cantilever_problem(Cantilever(), 2)
+        problem = build(Cantilever(), 2).problem
+        iy = problem.disc.node_dof(np.array([0.16, 0.0]), 1)
         solver = TangentSolver(reuse=reuse)
         recs, state = load_path(problem, (1.0, 3.0), max_increment=3.0, solver=solver)
         out.append((-state.u[iy], [r["newton_iterations"] for r in recs], solver.factorisations))

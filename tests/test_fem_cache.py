@@ -28,7 +28,7 @@ def test_reference_is_computed_once_then_read(tmp_cache, monkeypatch):
     def boom(*a, **k):
         raise AssertionError("solve called although the value is cached")
 
-    monkeypatch.setattr(fem_reference, "solve", boom)
+    monkeypatch.setattr(fem_reference.model, "solve", boom)
     assert fem_reference.reference(sc, "period", resolution=2) == T
 
 

@@ -92,3 +92,25 @@ def test_deletion_criterion(rule, deleted):
     # deletion off: nothing happens
     off, _ = bar(1, deletion=False)
     assert len(off.delete_failed(state)) == 0 and off.disc.active.all()
+
+
+def test_damage_is_read_at_j2_points_only():
+    """History column HIST_DAMAGE is the damage D of the J2 law only (the mortar law of 003 keeps a
+    component of its damage tensor there): with that column set to 1 everywhere, the J2 elements
+    count as failed and carry no stress, the mortar elements do not; a table without a J2 law
+    refuses deletion."""
+    from fem_reference.observe import failed_elements
+    from workbench.materials import MORTAR_003
+
+    disc = Discretisation(box((0, 0, 0), (2 * W, W, W), (2, 1, 1)), order=1)
+    mat_id = np.array([0, 1], np.int64)  # element 0 J2, element 1 mortar
+    problem = Problem(disc, MaterialTable((TABLE1_STEEL, MORTAR_003)), None, np.zeros(0),
+                      lambda lam: np.zeros(disc.N), mat_id=mat_id, deletion="any")
+    state = problem.initial_state()
+    state.history[:, HIST_DAMAGE] = 1.0
+    assert np.array_equal(problem.live_points(state).reshape(2, -1).all(axis=1), [False, True])
+    assert np.array_equal(failed_elements(problem, state), [True, False])
+    assert np.array_equal(problem.delete_failed(state), [0])
+    with pytest.raises(ValueError, match="deletion"):
+        Problem(disc, MaterialTable((MORTAR_003,)), None, np.zeros(0),
+                lambda lam: np.zeros(disc.N), deletion="any")

@@ -24,10 +24,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from . import mortar as _mortar
 from .elastic import elastic_energy, mooney_rivlin_point, neo_hooke_point, svk_point  # noqa: F401
 from .j2 import j2_energy, j2_point  # noqa: F401
 from .layout import N_HISTORY_J2, N_PARAMS
+from .mortar import N_HISTORY as N_HISTORY_MORTAR
+from .mortar import mortar_energy, mortar_point
 from .tensor import (INVERTED, JIT, JIT_PARALLEL, LOG_SERIES_MAX, NOT_CONVERGED,  # noqa: F401
                      OK, UNKNOWN_LAW, _copy, _fail, eig_sym3_closed, eigh3, exp_sym, log_spd)
 
@@ -47,7 +48,7 @@ def stored_energy_point(F, h, prm):
     if law == 3:
         return j2_energy(F, h, prm)
     if law == 4:
-        return _mortar.mortar_energy(F, h, prm)
+        return mortar_energy(F, h, prm)
     return np.nan
 
 
@@ -95,7 +96,7 @@ def material_point(F, h_old, prm, P, h_new, A, want_tangent):
     if law == 3:
         return j2_point(F, h_old, prm, P, h_new, A, want_tangent)
     if law == 4:
-        return _mortar.mortar_point(F, h_old, prm, P, h_new, A, want_tangent)
+        return mortar_point(F, h_old, prm, P, h_new, A, want_tangent)
     _fail(P, A, want_tangent)
     return UNKNOWN_LAW
 
@@ -118,7 +119,7 @@ def _check(F, h_old, prm, mat_id):
                 raise ValueError("prm[:, 10]: J2 hardening kind must be 0 (Swift) or 1 (linear)")
             if prm[r, 11] != 0.0 and prm[r, 11] != 1.0:
                 raise ValueError("prm[:, 11]: J2 failure mode must be 0 (literal) or 1 (compression)")
-        if law == 4 and h_old.shape[1] < _mortar.N_HISTORY:
+        if law == 4 and h_old.shape[1] < N_HISTORY_MORTAR:
             raise ValueError("h_old: the mortar law needs 23 history columns")
     if F.shape[1] != 3 or F.shape[2] != 3 or h_old.shape[0] != F.shape[0]:
         raise ValueError("F must be (N, 3, 3) and h_old (N, n_history)")
@@ -150,7 +151,7 @@ def _points_into(F, h_old, prm, mat_id, P, h_new, A, status, want_tangent):
         elif law == 2:
             status[n] = mooney_rivlin_point(F[n], row, P[n], A[m], want_tangent)
         elif law == 4:
-            status[n] = _mortar.mortar_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
+            status[n] = mortar_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
         else:
             status[n] = j2_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
 

@@ -1,0 +1,851 @@
+"""The FEM's reader of a scene model (:class:`workbench.scenes.model.Model`): the counterpart of the
+particle methods' one driver :func:`sph.driver.solve`, with the same result keys.
+
+``solve_model(scene, resolution, drive=None, element=None, fbar=None, deletion=False, fields=None,
+**options)``:
+
+1. **mesh** (:func:`discretise`) — ``scene.model(h)`` at the element size h = ``model.length`` /
+   ``resolution``. The body is the union of the regions that are not *held*: a structured grid
+   whose lines include every box face of every region (:meth:`Shape.boxes`; a shape that is not a
+   union of boxes contributes its bounding box, and its boundary becomes a staircase of elements
+   kept by their centroid), clipped to the body's bounding box. Each element takes the region of
+   highest priority containing its centroid (ties: the earlier region), as a particle takes its
+   region in :mod:`sph.particles`; elements whose region is held are not meshed, and the nodes of
+   the body on a held region (its interface with the body) are clamped — a rigid clamp block.
+   Elements: 9-node quadrilaterals (3×3 Gauss) in 2-D, plane strain or stress per ``model.plane``;
+   27-node hexahedra (3×3×3 Gauss) in 3-D (:mod:`fem_reference.mesh`); ``element`` 'q4' or
+   'hex8' for the linear ones (the homogeneous SS-curve block needs no more), or a (scikit-fem
+   element, quadrature order) pair.
+2. **sets** — nodes (every node of the quadratic elements) in the set's shape (to 1e-6 h), within
+   its region when given; boundary facets whose vertices all lie in it (tractions, pressures); a
+   :class:`~workbench.scenes.shapes.Point` set is a probe: the shape functions of the element
+   containing the point interpolate there (its node set: the node at the point, or else the nodes
+   of that element).
+3. **constraints and loads** (:mod:`fem_reference.boundary`) — :class:`Clamp`, :class:`Roller`,
+   :class:`Prescribed` displacement (a function of the load parameter, or of time; a prescribed
+   velocity of an explicit drive is integrated in time to a displacement, exactly for a
+   :class:`Table`); :class:`Traction` and :class:`Pressure` on the set's boundary facets
+   (consistent nodal forces), :class:`PointLoad` at the probe point (consistent nodal forces; on a
+   set of nodes, shared equally), :class:`BodyForce` ρ g on the elements of its regions, each with
+   its ``scale`` function; :class:`InitialVelocity` at the nodes of its regions.
+4. **drive** — :class:`Static`: :func:`~fem_reference.static.load_path` along ``drive.path`` (Newton
+   with line search, increments halved on failure), observables at each value; :class:`Modal`: the
+   lowest ``n_modes`` eigenpairs about the reference state (:mod:`.modal`); :class:`Explicit`:
+   Newmark's average-acceleration rule (:mod:`.dynamic`, implicit). Its time step does not follow
+   the CFL factor ``dt_factor`` of the particle methods: it is T₁/``steps_per_period`` (default
+   100) with T₁ the lowest modal period, so that the period elongation of the trapezoidal rule,
+   (ω₁Δt)²/12, is 0.033 %; n = ⌈t_end/Δt⌉ steps, as the particle driver counts them (the run may
+   end up to one step past t_end), at least 20 (then Δt = t_end/20). A body free to move rigidly
+   (singular stiffness: ω₁² below :data:`RIGID` times tr K₀/tr M) takes T₁ of its lowest
+   deforming mode; when none is found, Δt = t_end/max(n_out, 20). Mass-proportional damping as in
+   the drive.
+   Observables are recorded about ``n_out`` times, the Displacement histories behind
+   :class:`Period` observables at every step.
+5. **observables** — :class:`Displacement` (probe, or the mean over the set's nodes weighted by
+   ∫N_a dV), :class:`Position` (the same of the current coordinate), :class:`Reaction` (the force
+   the constraints exert on the set, the sum of f_int − f_ext over the set's constrained DOFs of
+   that axis, :func:`.observe.reaction`: the particle driver's −Σ(f_int + f_ext) with its
+   f_int = −∂Π/∂x, i.e. the same sign — positive along +axis on a face pulled in +axis; NaN in
+   explicit runs, as there), :class:`MeanStress` (:func:`.observe.mean_stress`),
+   :class:`FailedFraction` (elements deleted or failed at every point), :class:`Period` (zero
+   crossings, as :func:`sph.diagnostics.period_amplitude`; amplitude max |u| over every step).
+
+Not read: regions with the 'concentric' arrangement (a particle arrangement of a ring: refused with
+one line), contact between bodies and models of several bodies (refused), the stability monitor
+of an explicit drive (the implicit scheme has no stability limit; a Newton failure ends the run
+with status 'diverged').
+
+Result keys (those of :func:`sph.driver.solve`): static — ``parameter``, ``parameter_name``, every
+observable by name (an array over the path), ``status`` (one per value), ``wall_time``
+(cumulative, s), ``iterations``, ``newton_iterations``, ``residual_history``, ``assembly_time``,
+``solve_time``, ``eps_p`` (mean equivalent plastic strain, J2 tables); modal — ``periods``
+(longest first), ``period``, ``omega`` (ascending), ``status``, ``wall_time``; explicit — ``time``
+(records), the observables, ``kinetic_energy``, ``strain_energy``, ``energy_history``,
+``external_work``, ``status``, ``dt``, ``steps``, ``modal_period``, ``omega``, ``wall_time``,
+``loop_time``, ``setup_time``, ``newton_iterations``, each Period's value and ``<name>_amplitude``;
+always ``n_dof``, ``n_elements``, ``element``, ``h``, ``plane``; then ``scene.summarise(out)``
+when the drive is the scene's own kind.
+
+:func:`solve` (``fem_reference.solve``) runs every scene through :func:`solve_model`, with the
+plate study's option ``dynamic`` (False: the modal periods only; True: the scene's explicit drive,
+and ``period`` stays the modal period, the history's going to ``period_dynamic``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from workbench.materials import HIST_EPS_P, MaterialTable
+from workbench.scenes import model as M
+from workbench.scenes.params import SceneError
+from workbench.scenes.shapes import Point
+
+from .assembly import Discretisation
+from .boundary import Constraints, Loads
+from .mesh import grid_lines, tensor_mesh
+from .static import Problem
+
+TOL = 1e-6
+"""Geometric tolerance over the element size: nodes within TOL·h of a shape are in it."""
+STEPS_PER_PERIOD = 100
+"""Newmark steps per lowest modal period: period elongation (2π/100)²/12 = 0.033 %."""
+MIN_STEPS = 20
+"""Fewest Newmark steps over an explicit drive's end time."""
+N_MODES_EXPLICIT = 3
+"""Modal periods computed before a time run (the lowest sets the step; reported as ``omega``)."""
+RIGID = 1e-12
+"""A mode with ω² below RIGID · tr K₀/tr M is a rigid-body mode. tr K₀/tr M ~ c²/h² is about the
+largest ω² of the mesh; a zero eigenvalue comes out at ~1e-17 of it (round-off), the lowest
+bending mode of a plate of aspect 10 with 100 elements across at ~1e-8 ((H h/L²)²)."""
+
+ELEMENTS = {"q9": (2, 2), "quad9": (2, 2), "q4": (2, 1), "quad4": (2, 1),
+            "hex27": (3, 2), "hex8": (3, 1)}
+"""Element names: (dimension, polynomial order)."""
+
+OPTIONS = ("rtol", "maxit", "max_increment", "min_increment", "steps_per_period", "field_frames")
+
+
+# ------------------------------------------------------------------------------------------------
+# The discretised model
+# ------------------------------------------------------------------------------------------------
+
+@dataclass
+class FemModel:
+    """A model on a mesh: the discretisation, the problem and the sets.
+
+    ``region`` (nel,) index into ``model.regions`` of each element; ``nodes``: set name → scalar
+    node indices (DOF of component i: node·d + i); ``probes``: set name → (d, N) interpolation
+    matrix at the set's point; ``facets``: set name → boundary facets; ``X`` (d, n_nodes) node
+    coordinates; ``node_volume`` (n_nodes,) ∫ N_a dV; ``clamped`` the scalar nodes clamped by held
+    regions."""
+
+    model: M.Model
+    h: float
+    disc: Discretisation
+    problem: object
+    constraints: Constraints
+    loads: Loads
+    region: np.ndarray
+    mat_id: np.ndarray
+    table: MaterialTable
+    X: np.ndarray
+    node_volume: np.ndarray
+    nodes: dict = field(default_factory=dict)
+    probes: dict = field(default_factory=dict)
+    facets: dict = field(default_factory=dict)
+    clamped: np.ndarray | None = None
+    element: str = ""
+    prescribed: list = field(default_factory=list)  # (dofs, displacement fn, velocity fn)
+    velocity_holders: list = field(default_factory=list)  # (_Holder, velocity fn)
+
+    @property
+    def d(self) -> int:
+        return self.disc.d
+
+    def dofs(self, set_name: str, axis: int | None = None) -> np.ndarray:
+        n = self.nodes[set_name]
+        if axis is None:
+            return (n[:, None] * self.d + np.arange(self.d)).ravel()
+        return n * self.d + axis
+
+    def elements_of(self, regions) -> np.ndarray:
+        """bool (nel,): elements of the named regions (all when None)."""
+        if regions is None:
+            return np.ones(self.disc.nel, bool)
+        ids = [i for i, r in enumerate(self.model.regions) if r.name in set(regions)]
+        return np.isin(self.region, ids)
+
+
+def _element_choice(element, dim: int):
+    """(Discretisation keyword arguments, name) of the ``element`` option."""
+    if element is None:
+        element = "q9" if dim == 2 else "hex27"
+    if isinstance(element, str):
+        key = element.lower()
+        if key not in ELEMENTS or ELEMENTS[key][0] != dim:
+            allowed = ", ".join(k for k, v in ELEMENTS.items() if v[0] == dim)
+            raise ValueError(f"element: {element!r} is not allowed in {dim}-D; allowed: {allowed}")
+        return {"order": ELEMENTS[key][1]}, key
+    if isinstance(element, tuple) and len(element) == 2:
+        return {"element": element}, f"{type(element[0]).__name__}/intorder {element[1]}"
+    raise ValueError(f"element: {element!r} is not an element name or a (scikit-fem element, "
+                     "quadrature order) pair")
+
+
+def _scale(f):
+    """A model time function (number, Table, callable) as a float-valued callable."""
+    g = M.as_function(f)
+    return lambda t: float(g(t))
+
+
+def _assign(model: M.Model, c: np.ndarray, tol: float) -> np.ndarray:
+    """Region index (into model.regions) of each centroid c (n, d): highest priority, then the
+    earlier region; -1 outside every region. SceneError when two regions of equal priority share
+    interior centroids."""
+    best = np.full(len(c), -1, np.int64)
+    best_pri = np.full(len(c), -np.inf)
+    inner = []
+    for k, r in enumerate(model.regions):
+        ins = r.shape.contains(c, tol)
+        take = ins & (r.priority > best_pri)
+        best[take] = k
+        best_pri[take] = r.priority
+        inner.append((r, r.shape.contains(c, -tol)))
+    for i, (a, ia) in enumerate(inner):
+        for b, ib in inner[i + 1:]:
+            if a.priority == b.priority and np.any(ia & ib):
+                raise SceneError(f"regions '{a.name}' and '{b.name}' overlap "
+                                 f"({int(np.count_nonzero(ia & ib))} elements inside both) without "
+                                 "a stated priority; give one a higher priority")
+    return best
+
+
+def _mesh(model: M.Model, h: float):
+    """The tensor mesh of the body and the region of each element (module docstring, step 1)."""
+    tol = TOL * h
+    boxes = []
+    for r in model.regions:
+        bx = r.shape.boxes()
+        if bx is None:
+            b = r.shape.bounds()
+            if b is None:
+                raise SceneError(f"region '{r.name}': an unbounded shape needs a bounded region "
+                                 "(intersect it with a Box)")
+            bx = [b]
+        boxes += [(np.asarray(lo, float), np.asarray(hi, float)) for lo, hi in bx]
+    body_boxes = []
+    for r in model.regions:
+        if not r.held:
+            b = r.shape.bounds()
+            if b is None:
+                raise SceneError(f"region '{r.name}': an unbounded shape needs a bounded region")
+            body_boxes.append(b)
+    lo = np.min([b[0] for b in body_boxes], axis=0)
+    hi = np.max([b[1] for b in body_boxes], axis=0)
+    try:
+        lines = grid_lines(boxes, h)
+    except ValueError as err:
+        raise SceneError(f"regions: {err}") from None
+    lines = [ln[(ln >= lo[i] - tol) & (ln <= hi[i] + tol)] for i, ln in enumerate(lines)]
+    if any(len(ln) < 2 for ln in lines):
+        raise SceneError("regions: the body is thinner than one element along an axis")
+    full = tensor_mesh(lines)
+    c = full.p[:, full.t].mean(axis=1).T
+    reg = _assign(model, c, tol)
+    held = np.array([r.held for r in model.regions] + [True])  # -1 (outside): not meshed
+    keep = np.flatnonzero(~held[reg])
+    if not len(keep):
+        raise SceneError(f"regions: no element of size {h:g} m lies in the body")
+    mesh = full if len(keep) == full.t.shape[1] else full.restrict(keep)
+    return mesh, reg[keep]
+
+
+def discretise(model: M.Model, resolution: int, element=None, fbar=None,
+               deletion=False) -> FemModel:
+    """The FEM of ``model`` at ``resolution`` elements across ``model.length`` (module docstring,
+    steps 1–3). SceneError (one line) for what the FEM cannot read or a set that selects nothing."""
+    if not (isinstance(resolution, (int, np.integer)) and resolution >= 1):
+        raise SceneError(f"resolution: {resolution!r} is not allowed; an integer >= 1 "
+                         f"(elements across {model.length:g} m)")
+    for r in model.regions:
+        if r.arrangement == "concentric":
+            raise SceneError(f"region '{r.name}': arrangement 'concentric' (a particle arrangement "
+                             "of a ring) is not meshed by the FEM; use the particle methods")
+    if model.contact:
+        raise SceneError("contact: the FEM has no contact between bodies; use the particle methods")
+    if len({r.body for r in model.regions if not r.held}) > 1:
+        raise SceneError("regions: the FEM meshes one body (the model has "
+                         f"{', '.join(model.bodies)})")
+    h = model.length / int(resolution)
+    tol = TOL * h
+    d = model.dim
+    kw, ename = _element_choice(element, d)
+    mesh, region = _mesh(model, h)
+    disc = Discretisation(mesh, fbar=fbar, **kw)
+    # materials of the meshed regions, in region order
+    mats, rows = [], {}
+    for r in model.regions:
+        if not r.held:
+            if r.material not in mats:
+                mats.append(r.material)
+            rows[r.name] = mats.index(r.material)
+    table = MaterialTable(tuple(mats))
+    mat_id = np.array([rows.get(r.name, -1) for r in model.regions], np.int64)[region]
+    X = np.ascontiguousarray(disc.basis.doflocs[:, ::d])
+    n_nodes = X.shape[1]
+    vol = np.bincount(disc.sdofs.ravel(),
+                      weights=np.einsum("eq,eqa->ea", disc.dV0, disc.Nq).ravel(),
+                      minlength=n_nodes)
+    fm = FemModel(model, h, disc, None, Constraints(disc), Loads(disc), region, mat_id, table, X,
+                  vol, element=ename)
+    _sets(fm, tol)
+    _constraints(fm, tol)
+    if not len(fm.constraints.dofs) and not isinstance(model.drive, M.Explicit):
+        raise SceneError("constraints: the body has no support (no clamp, roller, prescribed "
+                         "motion or held region): its static and modal problems are singular")
+    fm.constraints.apply()
+    _loads(fm)
+    try:
+        fm.problem = Problem(disc, table, model.plane if d == 2 else None, fm.constraints.values,
+                             fm.loads, mat_id=mat_id, deletion=deletion)
+    except ValueError as err:
+        raise SceneError(str(err)) from None
+    return fm
+
+
+def _nodes_of(fm: FemModel, region_name: str) -> np.ndarray:
+    """bool (n_nodes,): nodes of the elements of the named region."""
+    k = [r.name for r in fm.model.regions].index(region_name)
+    mask = np.zeros(fm.X.shape[1], bool)
+    mask[fm.disc.sdofs[fm.region == k].ravel()] = True
+    return mask
+
+
+def _sets(fm: FemModel, tol: float) -> None:
+    disc, mesh = fm.disc, fm.disc.mesh
+    verts = mesh.p.T
+    bf = mesh.boundary_facets()
+    for s in fm.model.sets:
+        if isinstance(s.shape, Point):
+            p = np.asarray(s.shape.at, float)
+            if p.shape != (fm.d,):
+                raise SceneError(f"set '{s.name}': the point {tuple(p)} has {len(p)} coordinates "
+                                 f"in a {fm.d}-D model")
+            try:
+                P = disc.probe(p[None, :])
+            except ValueError:
+                raise SceneError(f"set '{s.name}': the point {tuple(p)} lies outside the meshed "
+                                 "body") from None
+            fm.probes[s.name] = P
+            at = np.flatnonzero(np.linalg.norm(fm.X.T - p, axis=1) <= tol)
+            if not len(at):
+                at = np.unique(P.indices // fm.d)
+            fm.nodes[s.name] = at
+            fm.facets[s.name] = np.zeros(0, np.int64)
+            continue
+        mask = s.shape.contains(fm.X.T, tol)
+        vmask = s.shape.contains(verts, tol)
+        if s.region is not None:
+            mask &= _nodes_of(fm, s.region)
+            k = [r.name for r in fm.model.regions].index(s.region)
+            vin = np.zeros(mesh.p.shape[1], bool)
+            vin[mesh.t[:, fm.region == k].ravel()] = True
+            vmask &= vin
+        if not mask.any():
+            raise SceneError(f"set '{s.name}': selects no node at element size {fm.h:g} m")
+        fm.nodes[s.name] = np.flatnonzero(mask)
+        fm.facets[s.name] = bf[np.all(vmask[mesh.facets[:, bf]], axis=0)]
+
+
+def integral(f, t_end: float, breaks=()) -> callable:
+    """u(t) = ∫₀ᵗ f(s) ds for 0 ≤ t ≤ t_end: f is interpolated linearly on 4000 intervals refined
+    at ``breaks`` and at a :class:`Table`'s points, and that interpolant is integrated exactly
+    (exact for a Table, piecewise linear; second order for any other function). Beyond t_end
+    f is held at f(t_end)."""
+    g = M.as_function(f)
+    grid = np.linspace(0.0, t_end, 4001)
+    pts = list(breaks) + list(getattr(g, "times", ()))
+    grid = np.union1d(grid, [p for p in pts if 0.0 < p < t_end])
+    try:
+        v = np.asarray(g(grid), float) * np.ones_like(grid)
+    except (TypeError, ValueError):  # a callable of one number at a time
+        v = np.array([float(g(t)) for t in grid])
+    dg = np.diff(grid)
+    U = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dg)])
+    slope = np.diff(v) / dg
+
+    def disp(t):
+        t = float(t)
+        if t >= t_end:
+            return float(U[-1] + v[-1] * (t - t_end))
+        if t <= 0.0:
+            return float(v[0] * t)
+        k = min(int(np.searchsorted(grid, t, side="right")) - 1, len(dg) - 1)
+        tau = t - grid[k]
+        return float(U[k] + v[k] * tau + 0.5 * slope[k] * tau * tau)
+
+    return disp
+
+
+class _Holder:
+    """A prescribed displacement u(t) whose function is set later (a prescribed velocity is
+    integrated once the time step, hence the run's end, is known)."""
+
+    def __init__(self, fn):
+        self.fn = fn
+
+    def __call__(self, t):
+        return float(self.fn(t))
+
+
+def _constraints(fm: FemModel, tol: float) -> None:
+    model, bc, d = fm.model, fm.constraints, fm.d
+    clamped = np.zeros(fm.X.shape[1], bool)
+    for r in model.regions:
+        if r.held:
+            on = r.shape.contains(fm.X.T, tol)
+            if not on.any():
+                raise SceneError(f"region '{r.name}': a held region that touches no node of the "
+                                 "body clamps nothing")
+            clamped |= on
+    fm.clamped = np.flatnonzero(clamped)
+    if len(fm.clamped):
+        bc.prescribe_dofs((fm.clamped[:, None] * d + np.arange(d)).ravel(), 0.0)
+    for c in model.constraints:
+        if isinstance(c, M.Clamp):
+            bc.prescribe_dofs(fm.dofs(c.set), 0.0)
+            continue
+        dofs = fm.dofs(c.set, c.axis)
+        if isinstance(c, M.Roller):
+            bc.prescribe_dofs(dofs, 0.0)
+            continue
+        # Prescribed
+        if isinstance(model.drive, M.Modal):
+            bc.prescribe_dofs(dofs, 0.0)  # the modes about the reference state: held
+            continue
+        if c.displacement is not None:
+            disp = _scale(c.displacement)
+            vel = None
+        else:
+            vel = M.as_function(c.velocity)
+            disp = None  # integrated once the time step is known (explicit drives only)
+        fm.prescribed.append((dofs, disp, vel))
+        holder = _Holder(disp if disp is not None else (lambda t: 0.0))
+        bc.prescribe_dofs(dofs, holder)
+        if vel is not None:
+            fm.velocity_holders.append((holder, vel))
+
+
+def _loads(fm: FemModel) -> None:
+    model, loads, disc = fm.model, fm.loads, fm.disc
+    for ld in model.loads:
+        if isinstance(ld, M.InitialVelocity):
+            continue
+        s = _scale(ld.scale)
+        if isinstance(ld, (M.Traction, M.Pressure)):
+            fac = fm.facets[ld.set]
+            if not len(fac):
+                raise SceneError(f"{type(ld).__name__} on set '{ld.set}': the set holds no "
+                                 f"boundary facet at element size {fm.h:g} m")
+            if isinstance(ld, M.Traction):
+                loads.vector(disc.traction_load(fac, np.asarray(ld.traction, float)), s)
+            else:
+                loads.vector(disc.pressure_load(fac, float(ld.pressure)), s)
+        elif isinstance(ld, M.PointLoad):
+            force = np.asarray(ld.force, float)
+            if ld.set in fm.probes:
+                loads.vector(fm.probes[ld.set].T @ force, s)
+            else:
+                f = np.zeros(disc.N)
+                n = fm.nodes[ld.set]
+                for i in range(fm.d):
+                    f[n * fm.d + i] = force[i] / len(n)
+                loads.vector(f, s)
+        elif isinstance(ld, M.BodyForce):
+            rho_e = np.where(fm.elements_of(ld.regions), fm.table.rho(fm.mat_id), 0.0)
+            loads.body(rho_e, np.asarray(ld.acceleration, float), s)
+
+
+# ------------------------------------------------------------------------------------------------
+# Observables
+# ------------------------------------------------------------------------------------------------
+
+def period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
+    """Period (s) from the zero crossings of u(t) after t = 0 — crossing times interpolated
+    linearly, the period twice the least-squares slope of crossing time against crossing index
+    (NaN with fewer than two crossings), the definition of :func:`sph.diagnostics.period_amplitude`
+    — and the amplitude max |u| (m) of the samples (the FEM samples every step)."""
+    t, u = np.asarray(t, float), np.asarray(u, float)
+    amp = float(np.max(np.abs(u))) if len(u) and np.isfinite(u).any() else math.nan
+    t1, y1 = t[1:], u[1:]
+    i = np.flatnonzero(np.sign(y1[:-1]) * np.sign(y1[1:]) < 0)
+    tc = t1[i] - y1[i] * (t1[i + 1] - t1[i]) / (y1[i + 1] - y1[i])
+    if len(tc) < 2:
+        return math.nan, amp
+    return float(2 * np.polyfit(np.arange(len(tc)), tc, 1)[0]), amp
+
+
+def _displacement(fm: FemModel, o, u: np.ndarray) -> float:
+    if o.set in fm.probes:
+        return float((fm.probes[o.set] @ u)[o.axis])
+    n = fm.nodes[o.set]
+    w = fm.node_volume[n]
+    return float(w @ u[n * fm.d + o.axis] / w.sum())
+
+
+def observe(fm: FemModel, state, lam: float | None = None, need_force: bool = True) -> dict:
+    """The model's observables at the committed ``state``; ``lam`` the load parameter of f_ext
+    for reactions (None: no reaction, NaN — explicit drives)."""
+    from .observe import failed_elements, mean_stress, reaction
+
+    u = state.u
+    out = {}
+    f_int = None
+    for o in fm.model.observables:
+        if isinstance(o, M.Displacement):
+            out[o.name] = _displacement(fm, o, u)
+        elif isinstance(o, M.Position):
+            if o.set in fm.probes:
+                X = np.asarray(fm.model.set(o.set).shape.at, float)[o.axis]
+                out[o.name] = float(X + (fm.probes[o.set] @ u)[o.axis])
+            else:
+                n = fm.nodes[o.set]
+                w = fm.node_volume[n]
+                out[o.name] = float(w @ (fm.X[o.axis, n] + u[n * fm.d + o.axis]) / w.sum())
+        elif isinstance(o, M.Reaction):
+            if lam is None or not need_force:
+                out[o.name] = math.nan
+                continue
+            if f_int is None:
+                f_int = fm.problem.evaluate(u, state, tangent=False)["f_int"]
+            out[o.name] = float(reaction(fm.problem, state, dofs=fm.dofs(o.set, o.axis), lam=lam,
+                                         f_int=f_int)[o.axis]) if f_int is not None else math.nan
+        elif isinstance(o, M.MeanStress):
+            sel = fm.elements_of(o.regions)
+            out[o.name] = float(mean_stress(fm.problem, state, elements=sel)[o.i, o.j]) \
+                if (sel & fm.disc.active).any() else math.nan
+        elif isinstance(o, M.FailedFraction):
+            sel = fm.elements_of(o.regions)
+            failed = failed_elements(fm.problem, state)
+            out[o.name] = float(np.count_nonzero(failed & sel) / max(1, np.count_nonzero(sel)))
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Field output
+# ------------------------------------------------------------------------------------------------
+
+def mesh_series(folder, name: str, disc):
+    """``add(t, u, v=None)`` writing the mesh (vertex ``displacement`` and, when given,
+    ``velocity``) as a frame of the ParaView series ``name`` (.pvd + .vtu) in ``folder``."""
+    from workbench.fields import FieldSeries
+
+    from .mesh import vtk_grid
+
+    series = FieldSeries(folder, name)
+    grid = vtk_grid(disc.basis.mesh)
+    nodal = disc.basis.nodal_dofs  # (d, n_vertices): the vertex DOFs of each component
+
+    def add(t, u, v=None):
+        data = dict(displacement=u[nodal].T)
+        if v is not None:
+            data["velocity"] = v[nodal].T
+        series.add(t, grid=grid, **data)
+
+    return add
+
+
+def mesh_snapshots(folder, name: str, disc, n_steps: int, frames: int):
+    """``snapshot(step, t, u, v)`` for :func:`fem_reference.dynamic.newmark`: about ``frames``
+    frames of :func:`mesh_series` over ``n_steps`` steps, the last step always."""
+    from workbench.fields import check_frames
+
+    every = max(1, -(-int(n_steps) // check_frames(frames)))
+    add = mesh_series(folder, name, disc)
+
+    def snapshot(step, t, u, v):
+        if step % every == 0 or step == n_steps:
+            add(t, u, v)
+
+    return snapshot
+
+
+# ------------------------------------------------------------------------------------------------
+# Drives
+# ------------------------------------------------------------------------------------------------
+
+def _error_status(err: Exception) -> str:
+    return f"error: {type(err).__name__}: {err}".replace("\n", " ")
+
+
+def _static(fm: FemModel, t0: float, options: dict, series) -> dict:
+    from .observe import plastic_strain
+    from .static import TangentSolver, load_path
+
+    drive = fm.model.drive
+    path = np.asarray(drive.path, dtype=float)
+    n = len(path)
+    names = [o.name for o in fm.model.observables if not isinstance(o, M.Period)]
+    out = dict(parameter=path, parameter_name=drive.parameter, wall_time=np.full(n, np.nan),
+               iterations=np.zeros(n, int), status=["error: not run"] * n,
+               residual_history=[[] for _ in range(n)], newton_iterations=[[] for _ in range(n)],
+               assembly_time=np.full(n, np.nan), solve_time=np.full(n, np.nan),
+               **{k: np.full(n, np.nan) for k in names})
+    j2 = fm.table.n_history > HIST_EPS_P
+    if j2:
+        out["eps_p"] = np.full(n, np.nan)
+
+    def measure(k, lam, state):
+        for key, v in observe(fm, state, lam).items():
+            out[key][k] = v
+        if j2:
+            out["eps_p"][k] = plastic_strain(fm.problem, state, "mean")
+        if series is not None:
+            series(lam, state.u)
+
+    solver = TangentSolver()
+    kw = {k: options[k] for k in ("max_increment", "min_increment", "rtol", "maxit")
+          if k in options}
+    try:
+        setup = time.perf_counter() - t0
+        recs, _ = load_path(fm.problem, path, callback=measure, solver=solver, **kw)
+        for k, r in enumerate(recs):
+            out["status"][k] = r["status"]
+            out["residual_history"][k] = r["residual_history"]
+            out["newton_iterations"][k] = r["newton_iterations"]
+            out["iterations"][k] = r["iterations"]
+            out["wall_time"][k] = r["wall_time"] + setup
+            out["assembly_time"][k] = r["assembly_time"]
+            out["solve_time"][k] = r["solve_time"]
+    except Exception as err:  # a failed run is a result (contract.md)
+        out["status"] = [_error_status(err)] * n
+    out["factorisations"] = solver.factorisations
+    out["krylov_iterations"] = solver.krylov_iterations
+    return out
+
+
+def _modes(fm: FemModel, k: int):
+    """ω (k,) ascending, rad/s, of the lowest modes (fewer when the free DOFs are fewer)."""
+    from .modal import lowest_modes
+
+    k = max(1, min(k, len(fm.disc.free) - 1))
+    omega, _ = lowest_modes(fm.problem, k=k)
+    return omega
+
+
+def _operators(fm: FemModel):
+    """The tangent K₀ about the reference state and the mass, on the free DOFs (CSC)."""
+    problem, disc = fm.problem, fm.disc
+    st = problem.initial_state()
+    K = problem.tangent(problem.evaluate(st.u, st, tangent=True)).tocsc()
+    return K, problem.mass()[disc.free][:, disc.free].tocsc()
+
+
+def _stiffness_scale(fm: FemModel) -> float:
+    """tr K₀ / tr M on the free DOFs, 1/s²: about the largest ω² of the mesh."""
+    K, Mf = _operators(fm)
+    return float(K.diagonal().sum() / Mf.diagonal().sum())
+
+
+def _deforming_period(fm: FemModel) -> float:
+    """The lowest period of the deforming modes of a body free to move rigidly (singular K₀):
+    shift-invert about a small negative shift −s (K₀ + s M is regular), the rigid modes (ω² below
+    :data:`RIGID` times tr K₀/tr M) skipped; NaN if none is found."""
+    import scipy.sparse.linalg as spla
+
+    K, Mf = _operators(fm)
+    scale = float(K.diagonal().sum() / Mf.diagonal().sum())
+    k = min(fm.d * (fm.d + 1) // 2 + N_MODES_EXPLICIT, K.shape[0] - 2)
+    try:
+        lam = spla.eigsh(K, k=k, M=Mf, sigma=-1e-6 * scale, which="LM", return_eigenvectors=False)
+    except Exception:
+        return math.nan
+    lam = np.sort(lam[lam > RIGID * scale])
+    return float(2 * np.pi / np.sqrt(lam[0])) if len(lam) else math.nan
+
+
+def _modal(fm: FemModel, t0: float) -> dict:
+    n = fm.model.drive.n_modes
+    try:
+        omega = _modes(fm, n)
+        periods = 2 * np.pi / omega  # longest first: ω ascends
+        out = dict(omega=omega, periods=periods, period=float(periods[0]), status="ok")
+    except Exception as err:  # a failed run is a result
+        out = dict(omega=np.full(n, np.nan), periods=np.full(n, np.nan), period=math.nan,
+                   status=_error_status(err))
+    out["wall_time"] = time.perf_counter() - t0
+    out["wall_time_modal"] = out["wall_time"]
+    return out
+
+
+def _initial_velocity(fm: FemModel, dt: float) -> np.ndarray:
+    """v₀ (N,): the model's initial velocities at the nodes of their regions; on the constrained
+    DOFs the rate of the prescribed motion at t = 0 (zero on clamps and rollers)."""
+    d, disc = fm.d, fm.disc
+    v = np.zeros((fm.X.shape[1], d))
+    for ld in fm.model.loads:
+        if isinstance(ld, M.InitialVelocity):
+            nodes = np.zeros(fm.X.shape[1], bool)
+            nodes[disc.sdofs[fm.elements_of(ld.regions)].ravel()] = True
+            idx = np.flatnonzero(nodes)
+            vel = ld.velocity
+            v[idx] = vel(fm.X[:, idx].T) if callable(vel) else np.asarray(vel, float)
+    v = v.ravel()
+    v[disc.fixed] = 0.0
+    for dofs, disp, vel in fm.prescribed:
+        v[dofs] = (float(np.asarray(vel(0.0))) if vel is not None
+                   else (disp(0.5 * dt) - disp(-0.5 * dt)) / dt)
+    return v
+
+
+def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict:
+    from .dynamic import newmark
+
+    drive = fm.model.drive
+    d = fm.d
+    omega = np.full(N_MODES_EXPLICIT, np.nan)
+    try:
+        with np.errstate(invalid="ignore"):
+            omega = _modes(fm, N_MODES_EXPLICIT)
+        if not (np.isfinite(omega[0]) and omega[0] ** 2 > RIGID * _stiffness_scale(fm)):
+            raise ValueError("a rigid mode: the stiffness is singular")
+        T1 = float(2 * np.pi / omega[0])
+    except Exception:  # a body free to move rigidly: the lowest period of the deforming modes
+        omega = np.full(N_MODES_EXPLICIT, np.nan)
+        T1 = _deforming_period(fm)
+    if math.isfinite(T1):
+        dt = T1 / options.get("steps_per_period", STEPS_PER_PERIOD)
+        n_steps = int(math.ceil(drive.t_end / dt))
+    else:
+        n_steps = max(drive.n_out, MIN_STEPS)
+        dt = drive.t_end / n_steps
+    if n_steps < MIN_STEPS:
+        n_steps = MIN_STEPS
+        dt = drive.t_end / n_steps
+    t_modal = time.perf_counter() - t0
+    for holder, vel in fm.velocity_holders:
+        holder.fn = integral(vel, (n_steps + 1) * dt)
+    v0 = _initial_velocity(fm, dt)
+    every = max(1, n_steps // max(1, drive.n_out))
+    periods = [o for o in fm.model.observables if isinstance(o, M.Period)]
+    sources = [fm.model.observable(p.of) for p in periods]
+    names = [o.name for o in fm.model.observables if not isinstance(o, M.Period)]
+    rec = {k: [] for k in names}
+    steps_rec = []
+    work = dict(w=0.0, u=None, f=None)
+    w_rec = []
+
+    def callback(step, t, state, v):
+        f = fm.problem.external(t)
+        if work["u"] is not None:
+            work["w"] += 0.5 * float((f + work["f"]) @ (state.u - work["u"]))
+        work["u"], work["f"] = state.u.copy(), f
+        if step % every == 0 or step == n_steps:
+            for k, val in observe(fm, state, None).items():
+                rec[k].append(val)
+            steps_rec.append(step)
+            w_rec.append(work["w"])
+
+    def history(u):
+        return np.array([_displacement(fm, o, u) for o in sources])
+
+    snap = None
+    if fields is not None:
+        snap = mesh_snapshots(fields, name, fm.disc, n_steps, options.get("field_frames", 20))
+    t_setup = time.perf_counter() - t0
+    tl = time.perf_counter()
+    try:
+        run = newmark(fm.problem, v0, dt, n_steps, observe=history, rtol=options.get("rtol", 1e-9),
+                      maxit=options.get("maxit", 20), snapshot=snap, callback=callback,
+                      damping=drive.damping)
+        status = run["status"]
+    except Exception as err:  # a failed run is a result
+        run = None
+        status = _error_status(err)
+    loop = time.perf_counter() - tl
+    idx = np.asarray(steps_rec, int)
+    out = dict(status=status, dt=dt, steps=n_steps if run is None else len(run["time"]) - 1,
+               modal_period=T1, omega=omega, wall_time_modal=t_modal, setup_time=t_setup,
+               loop_time=loop, time=idx * dt, external_work=work["w"],
+               **{k: np.asarray(v, float) for k, v in rec.items()})
+    if run is not None:
+        ke, se = run["kinetic_energy"][idx], run["strain_energy"][idx]
+        out.update(kinetic_energy=ke, strain_energy=se,
+                   energy_history=ke + se - np.asarray(w_rec),
+                   newton_iterations=run["newton_iterations"],
+                   deleted=run["deleted"])
+        out["time"] = run["time"][idx]
+    for j, p in enumerate(periods):
+        T = A = math.nan
+        if run is not None and status == "ok":
+            T, A = period_amplitude(run["time"], run["observed"][:, j])
+        out[p.name] = T
+        out[f"{p.name}_amplitude"] = A
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# The reader
+# ------------------------------------------------------------------------------------------------
+
+def model_at(scene, resolution: int):
+    """The scene's model at the element size of ``resolution`` (its geometry may depend on it)."""
+    if not (isinstance(resolution, (int, np.integer)) and resolution >= 1):
+        raise SceneError(f"resolution: {resolution!r} is not allowed; an integer >= 1")
+    h = scene.model().length / int(resolution)
+    return scene.model(h)
+
+
+def build(scene, resolution: int, drive=None, element=None, fbar=None, deletion=False) -> FemModel:
+    """:func:`discretise` of ``scene.model(h)`` at ``resolution`` (``drive`` replaces the
+    model's)."""
+    model = model_at(scene, resolution)
+    if drive is not None:
+        model = dataclasses.replace(model, drive=drive)
+    return discretise(model, int(resolution), element, fbar, deletion)
+
+
+def solve_model(scene, resolution: int, drive=None, element=None, fbar=None, deletion=False,
+                fields=None, **options) -> dict:
+    """Run the FEM on ``scene`` at ``resolution`` elements across ``model.length`` (module
+    docstring). ``drive`` replaces the model's (e.g. ``Modal()``); ``element``: None (Q9 / hex27),
+    'q9', 'q4', 'hex27', 'hex8' or a (scikit-fem element, quadrature order) pair; ``fbar``: the
+    F-bar option of :class:`~fem_reference.assembly.Discretisation`; ``deletion``: delete failed
+    elements (:class:`~fem_reference.static.Problem`); ``fields`` (a folder, or None): the mesh
+    (vertex displacement, and velocity in time runs) as the ParaView series
+    ``<scene>_fem_H<resolution>.pvd`` — one frame per load value of a static drive, about
+    ``field_frames`` frames of an explicit one, none of a modal one. ``options``: ``rtol``,
+    ``maxit``, ``max_increment``, ``min_increment`` (Newton and load stepping),
+    ``steps_per_period`` (Newmark), ``field_frames``."""
+    bad = sorted(set(options) - set(OPTIONS))
+    if bad:
+        raise ValueError(f"{bad[0]}: not an option of the FEM; allowed: {', '.join(OPTIONS)}, "
+                         "drive, element, fbar, deletion, fields")
+    t0 = time.perf_counter()
+    fm = build(scene, resolution, drive, element, fbar, deletion)
+    model = fm.model
+    name = None
+    if fields is not None:
+        from workbench.fields import series_name
+
+        name = series_name(scene.name, "fem", resolution)
+    if isinstance(model.drive, M.Static):
+        series = mesh_series(fields, name, fm.disc) if fields is not None else None
+        out = _static(fm, t0, options, series)
+    elif isinstance(model.drive, M.Modal):
+        out = _modal(fm, t0)
+    else:
+        out = _explicit(fm, t0, options, fields, name)
+    if not isinstance(model.drive, M.Static) or "wall_time" not in out:
+        out["wall_time"] = time.perf_counter() - t0
+    out.update(n_dof=int(fm.disc.N), n_elements=int(fm.disc.nel), element=fm.element, h=fm.h,
+               plane=model.plane)
+    if isinstance(model.drive, type(scene.model().drive)):
+        out.update(scene.summarise(out))
+    return out
+
+
+def solve(scene, resolution: int, dynamic: bool | None = None, **options) -> dict:
+    """``fem_reference.solve``: every scene through :func:`solve_model`. ``dynamic`` (the plate
+    study's contract): None — the scene's own drive; False — the lowest three modal periods
+    (``drive=Modal(3)``); True — the scene's explicit drive (Newmark), with ``period`` the modal
+    period (the plate study's reference on every rung) and the period of the history as
+    ``period_dynamic``."""
+    if dynamic is not None:
+        own = scene.model().drive
+        if dynamic and not isinstance(own, M.Explicit):
+            raise ValueError(f"dynamic: True needs an explicit drive; {scene.name} has "
+                             f"{type(own).__name__}")
+        if not dynamic:
+            options.setdefault("drive", M.Modal(3))
+    out = solve_model(scene, resolution, **options)
+    if dynamic:
+        for o in scene.model().observables:
+            if isinstance(o, M.Period):
+                out[f"{o.name}_dynamic"] = out.get(o.name, math.nan)
+                out[o.name] = out["modal_period"]
+    return out
