@@ -1,29 +1,41 @@
 """Classic updated-Lagrangian SPH for solids (003 §3.1, eq. 1–4, Fig. 6; Libersky & Petschek 1990;
-Gray, Monaghan & Swift 2001), 2-D plane strain: the baseline that shows where uncorrected SPH fails.
+Gray, Monaghan & Swift 2001), 2-D plane strain and 3-D, a material (a row of the body's
+:class:`~workbench.materials.MaterialTable`) per particle: the baseline that shows where
+uncorrected SPH fails.
 
-Eulerian kernel: the cubic spline of 003 eq. 4 (:mod:`sph.kernels`, support 2h, h = h_ratio·Δx)
-evaluated at the *current* positions, with the neighbours rebuilt every step by the shared cell
-list (:func:`sph.neighbours.neighbour_list`). One step follows Fig. 6 of 003 in kick–drift–kick
-form (shared :mod:`sph.integrate` rows):
+Eulerian kernel: the cubic spline of 003 eq. 4 (:mod:`sph.kernels`, support 2h, h = h_ratio·Δx, in
+d = 2 or 3 dimensions) evaluated at the *current* positions, with the neighbours rebuilt every step
+by the shared cell list (:func:`sph.neighbours.neighbour_list`). One step follows Fig. 6 of 003 in
+kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-proportional damping):
 
 1. kick–drift: v ← v + Δt/2 a, x ← x + Δt v;
 2. neighbours of the new positions (radius 2h);
 3. rates (:func:`rates_pass`): velocity gradient L_i = Σ_j V_j (v_j − v_i) ⊗ ∇_i W_ij (eq. 3,
-   V_j = m_j/ρ_j), continuity ρ̇_i = −ρ_i tr L_i, and the stress update —
-   ``stress="hypoelastic"`` (default): Hooke's law on the Jaumann rate,
-   σ̇ = λ tr(D) I + 2μ D + Ω σ − σ Ω (D, Ω the symmetric and skew parts of L; plane strain: L_zz = 0,
-   σ_zz carried); ``stress="hyperelastic"``: Ḟ = L F (F ← (I + Δt L) F) and σ = P Fᵀ/J from the
-   shared material library (so that the ring's Mooney–Rivlin law of eq. 12 is the same code as in
-   HPM and CSPH); the J2 law of the library works through the same path;
-4. forces (:func:`force_pass`): a_i = Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f_ij^n (R_i + R_j) − Π_ij I) ∇_i W_ij
-   + a_ext, with Monaghan's artificial viscosity Π_ij = (−α c̄ μ_ij + β μ_ij²)/ρ̄_ij for
-   v_ij·x_ij < 0, μ_ij = h v_ij·x_ij/(r² + 0.01h²), and, optionally (``artificial_stress`` = ε > 0),
-   the artificial stress of Gray, Monaghan & Swift (2001): in the principal frame of σ_i,
+   V_j = m_j/ρ_j; :func:`velocity_gradient_row`), continuity ρ̇_i = −ρ_i tr L_i (eq. 2), and the
+   stress update — ``stress="hypoelastic"`` (default): Hooke's law on the Jaumann rate with the
+   small-strain λ_i, μ_i of particle i's material, σ̇ = λ tr(D) I + 2μ D + Ω σ − σ Ω (D, Ω the
+   symmetric and skew parts of L; :func:`jaumann_update`; plane strain: L_zz = 0, σ_zz carried);
+   ``stress="hyperelastic"``: Ḟ = L F (F ← (I + Δt L) F) and σ = P Fᵀ/J from the shared material
+   library, row ``prm[mat_id[i]]`` (so that the ring's Mooney–Rivlin law of eq. 12 is the same code
+   as in HPM and CSPH); the J2 law of the library works through the same path;
+4. forces (:func:`force_pass`, eq. 1): a_i = Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f_ij^n (R_i + R_j)
+   − Π_ij I) ∇_i W_ij + a_ext, with Monaghan's artificial viscosity
+   Π_ij = (−α c̄_ij μ_ij + β μ_ij²)/ρ̄_ij for v_ij·x_ij < 0, μ_ij = h v_ij·x_ij/(r² + 0.01h²),
+   c̄_ij the mean of the two particles' P-wave speeds, and, optionally
+   (``artificial_stress`` = ε > 0), the artificial stress of Gray, Monaghan & Swift (2001)
+   (:func:`artificial_stress_row`): in the principal frame of σ_i (in 2-D of its in-plane block;
+   in 3-D the eigen-decomposition of σ_i),
    R'^a = −ε σ'^a/ρ_i² where σ'^a > 0 (else 0), rotated back; f_ij = W(r_ij)/W(Δx), exponent n = 4;
 5. kick: v ← v + Δt/2 a.
 
 Every pair term is antisymmetric (∇_i W_ij = −∇_j W_ji, the bracket symmetric), so linear momentum
-is conserved to round-off.
+is conserved to round-off; the torque of the non-central stress term is not zero (angular momentum
+is not conserved exactly). About the reference configuration and without viscosity, eq. 1–3 are
+the gradient of the stored energy ½ Σ_i V_i ε_i : C_i : ε_i (ε_i = sym L_i of the displacements)
+where neighbouring particles have equal density: m_i m_j/ρ_i² = V_i V_j ρ_j/ρ_i, so a density
+contrast between materials makes the linearised scheme non-conservative at their interface.
+The compiled kernels are written for any d with 2-D specialisations of the pair loops (the
+plate's time loop).
 """
 from __future__ import annotations
 
@@ -32,7 +44,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from workbench.materials import MaterialTable
 from workbench.materials.kernels import material_point
+from workbench.materials.tensor import eig_sym3_closed
 
 from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
@@ -40,108 +54,216 @@ from .method import ParticleBody
 from .neighbours import drop_cross_body, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
+HYPOELASTIC_LAWS = ("svk", "neo_hooke")
+"""Laws whose small-strain λ, μ the hypoelastic (Jaumann) path uses."""
+
+
+# ================================================================================================
+# Rates (eq. 2, 3) and the stress update
+# ================================================================================================
+
+@njit(inline="always", **JIT)
+def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L):
+    """Eq. 3: L_i = Σ_j V_j (v_j − v_i) ⊗ ∇_i W_ij (V_j = m_j/ρ_j, the cubic spline in d = 2 or 3)
+    into the 3×3 L (zero third row and column in 2-D), 1/s."""
+    d = x.shape[1]
+    for k in range(3):
+        for l in range(3):
+            L[k, l] = 0.0
+    if d == 2:
+        L00 = 0.0
+        L01 = 0.0
+        L10 = 0.0
+        L11 = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            j = indices[p]
+            dx0 = x[i, 0] - x[j, 0]
+            dx1 = x[i, 1] - x[j, 1]
+            r = math.sqrt(dx0 * dx0 + dx1 * dx1)
+            if r <= 0.0:
+                continue
+            g = dw_dr(r, h, 0, 2) / r * m[j] / rho[j]
+            dv0 = v[j, 0] - v[i, 0]
+            dv1 = v[j, 1] - v[i, 1]
+            L00 += dv0 * g * dx0
+            L01 += dv0 * g * dx1
+            L10 += dv1 * g * dx0
+            L11 += dv1 * g * dx1
+        L[0, 0] = L00
+        L[0, 1] = L01
+        L[1, 0] = L10
+        L[1, 1] = L11
+        return
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        r2 = 0.0
+        for k in range(d):
+            r2 += (x[i, k] - x[j, k]) ** 2
+        r = math.sqrt(r2)
+        if r <= 0.0:
+            continue
+        g = dw_dr(r, h, 0, d) / r * m[j] / rho[j]
+        for k in range(d):
+            dvk = (v[j, k] - v[i, k]) * g
+            for l in range(d):
+                L[k, l] += dvk * (x[i, l] - x[j, l])
+
+
+@njit(inline="always", **JIT)
+def jaumann_update(s, L, lam, mu, dt, T):
+    """Hooke's law on the Jaumann rate, one explicit step in place on the 3×3 Cauchy stress s, Pa:
+    s ← s + Δt (λ tr(D) I + 2μ D + Ω s − s Ω), D = ½(L + Lᵀ), Ω = ½(L − Lᵀ) (L 3×3, 1/s);
+    λ, μ the small-strain Lamé constants, Pa; T (3, 3) scratch."""
+    trD = L[0, 0] + L[1, 1] + L[2, 2]
+    for k in range(3):
+        for l in range(3):
+            rot = 0.0
+            for q in range(3):
+                rot += 0.5 * ((L[k, q] - L[q, k]) * s[q, l] - s[k, q] * (L[q, l] - L[l, q]))
+            T[k, l] = mu * (L[k, l] + L[l, k]) + rot
+        T[k, k] += lam * trD
+    for k in range(3):
+        for l in range(3):
+            s[k, l] += dt * T[k, l]
+
+
+@njit(inline="always", **JIT)
+def _jaumann_update_2d(s, L, lam, mu, dt):
+    """2-D (plane strain) specialisation of :func:`jaumann_update`: the in-plane block, and σ_zz
+    += Δt λ tr D (L_zz = 0, no rotation out of the plane)."""
+    trD = L[0, 0] + L[1, 1]
+    D01 = 0.5 * (L[0, 1] + L[1, 0])
+    W01 = 0.5 * (L[0, 1] - L[1, 0])  # Ω = [[0, W01], [−W01, 0]]
+    s00 = s[0, 0]
+    s01 = s[0, 1]
+    s11 = s[1, 1]
+    # Ω σ − σ Ω for the in-plane block
+    j00 = 2.0 * W01 * s01
+    j11 = -2.0 * W01 * s01
+    j01 = W01 * (s11 - s00)
+    s[0, 0] = s00 + dt * (lam * trD + 2.0 * mu * L[0, 0] + j00)
+    s[1, 1] = s11 + dt * (lam * trD + 2.0 * mu * L[1, 1] + j11)
+    s[0, 1] = s01 + dt * (2.0 * mu * D01 + j01)
+    s[1, 0] = s[0, 1]
+    s[2, 2] = s[2, 2] + dt * lam * trD
+
+
+@njit(inline="always", **JIT)
+def hyperelastic_update(Fi, L, dt, hist_i, prm_row, hist_new_i, s, Fn, P, A):
+    """F ← (I + Δt L) F (Ḟ = L F) in place on Fi (3, 3), then σ = P Fᵀ/J from the shared material
+    routine with the parameter row ``prm_row`` into s (3, 3), Pa; Fn, P (3, 3), A (3, 3, 3, 3)
+    scratch. Returns the material status (99 when J ≤ 0)."""
+    for k in range(3):
+        for l in range(3):
+            Fn[k, l] = Fi[k, l]
+    for k in range(3):
+        for l in range(3):
+            t = 0.0
+            for q in range(3):
+                t += L[k, q] * Fn[q, l]
+            Fi[k, l] = Fn[k, l] + dt * t
+    for k in range(3):
+        for l in range(3):
+            Fn[k, l] = Fi[k, l]
+    st = material_point(Fn, hist_i, prm_row, P, hist_new_i, A, False)
+    J = (Fn[0, 0] * (Fn[1, 1] * Fn[2, 2] - Fn[1, 2] * Fn[2, 1])
+         - Fn[0, 1] * (Fn[1, 0] * Fn[2, 2] - Fn[1, 2] * Fn[2, 0])
+         + Fn[0, 2] * (Fn[1, 0] * Fn[2, 1] - Fn[1, 1] * Fn[2, 0]))
+    if not J > 0.0:
+        st = 99
+        J = 1.0
+    for k in range(3):
+        for l in range(3):
+            t = 0.0
+            for q in range(3):
+                t += P[k, q] * Fn[l, q]
+            s[k, l] = t / J
+    return st
+
+
+@njit(inline="always", **JIT)
+def artificial_stress_row(i, sigma, rho_i, eps_as, d, R, a, V):
+    """Gray, Monaghan & Swift (2001): R_i = Σ_a r_a e_a ⊗ e_a over the principal directions e_a of
+    σ_i (2-D: of its in-plane block; 3-D: :func:`workbench.materials.tensor.eig_sym3_closed`), with
+    r_a = −ε σ_a/ρ_i² where σ_a > 0, else 0; into R[i] (d, d), Pa·m⁶/kg². a, V (3, 3) scratch."""
+    ri2 = 1.0 / (rho_i * rho_i)
+    if d == 2:
+        p = sigma[i, 0, 0]
+        q = sigma[i, 1, 1]
+        s = sigma[i, 0, 1]
+        th = 0.5 * math.atan2(2.0 * s, p - q)
+        cs = math.cos(th)
+        sn = math.sin(th)
+        p1 = p * cs * cs + 2.0 * s * cs * sn + q * sn * sn
+        p2 = p * sn * sn - 2.0 * s * cs * sn + q * cs * cs
+        r1 = -eps_as * p1 * ri2 if p1 > 0.0 else 0.0
+        r2 = -eps_as * p2 * ri2 if p2 > 0.0 else 0.0
+        R[i, 0, 0] = r1 * cs * cs + r2 * sn * sn
+        R[i, 1, 1] = r1 * sn * sn + r2 * cs * cs
+        R[i, 0, 1] = (r1 - r2) * cs * sn
+        R[i, 1, 0] = R[i, 0, 1]
+        return
+    for k in range(3):
+        for l in range(3):
+            a[k, l] = sigma[i, k, l]
+    eig_sym3_closed(a, V)
+    for k in range(3):
+        for l in range(3):
+            R[i, k, l] = 0.0
+    for e in range(3):
+        pe = a[e, e]
+        if pe > 0.0:
+            r = -eps_as * pe * ri2
+            for k in range(3):
+                for l in range(3):
+                    R[i, k, l] += r * V[k, e] * V[l, e]
 
 
 @njit(parallel=True, **JIT)
-def rates_pass(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu, hyper, prm, hist,
-               hist_new, eps_as, status):
-    """Velocity gradient, density, stress (hypoelastic Jaumann or hyperelastic via F) and the
-    artificial-stress tensor R of every particle, in place (steps 3 of the module docstring).
-    ``sigma`` (N,3,3) Cauchy stress, ``F`` (N,3,3), the new density into ``rho_new`` (``rho`` is
-    read by the neighbours, so it is not overwritten), returns R (N,2,2)."""
-    N = x.shape[0]
-    R = np.zeros((N, 2, 2))
+def rates_pass(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu, hyper, prm,
+               mat_id, hist, hist_new, eps_as, status, R):
+    """Step 3 of the module docstring for every particle, in place: the velocity gradient (eq. 3),
+    the new density into ``rho_new`` (eq. 2; ``rho`` is read by the neighbours, so it is not
+    overwritten), the stress — hypoelastic (Jaumann, λ (N,), μ (N,) per particle, Pa) or, with
+    ``hyper``, hyperelastic through F (N, 3, 3) and the material row prm[mat_id[i]] with history
+    hist → hist_new (N, n_history) — into ``sigma`` (N, 3, 3) Cauchy, Pa, and, where ε = eps_as > 0,
+    the artificial-stress tensor into R (N, d, d). ``status`` (N,) the material status (0 ok)."""
+    N, d = x.shape
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
     for c in prange(N_CHUNKS):
+        L = np.empty((3, 3))
+        T = np.empty((3, 3))
         Fn = np.empty((3, 3))
         P = np.empty((3, 3))
         A = np.empty((3, 3, 3, 3))
         for i in range(c * chunk, min(N, (c + 1) * chunk)):
-            L00 = 0.0
-            L01 = 0.0
-            L10 = 0.0
-            L11 = 0.0
-            for p in range(indptr[i], indptr[i + 1]):
-                j = indices[p]
-                dx0 = x[i, 0] - x[j, 0]
-                dx1 = x[i, 1] - x[j, 1]
-                r = math.sqrt(dx0 * dx0 + dx1 * dx1)
-                if r <= 0.0:
-                    continue
-                g = dw_dr(r, h, 0, 2) / r
-                Vj = m[j] / rho[j]
-                dv0 = v[j, 0] - v[i, 0]
-                dv1 = v[j, 1] - v[i, 1]
-                L00 += Vj * dv0 * g * dx0
-                L01 += Vj * dv0 * g * dx1
-                L10 += Vj * dv1 * g * dx0
-                L11 += Vj * dv1 * g * dx1
-            trD = L00 + L11
-            rho_new[i] = rho[i] * (1.0 - dt * trD)
+            velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L)
+            rho_new[i] = rho[i] * (1.0 - dt * (L[0, 0] + L[1, 1] + L[2, 2]))
             if hyper:
-                for k in range(3):
-                    for l in range(3):
-                        Fn[k, l] = F[i, k, l]
-                for l in range(3):
-                    F[i, 0, l] = Fn[0, l] + dt * (L00 * Fn[0, l] + L01 * Fn[1, l])
-                    F[i, 1, l] = Fn[1, l] + dt * (L10 * Fn[0, l] + L11 * Fn[1, l])
-                for k in range(3):
-                    for l in range(3):
-                        Fn[k, l] = F[i, k, l]
-                status[i] = material_point(Fn, hist[i], prm, P, hist_new[i], A, False)
-                J = Fn[0, 0] * (Fn[1, 1] * Fn[2, 2] - Fn[1, 2] * Fn[2, 1]) \
-                    - Fn[0, 1] * (Fn[1, 0] * Fn[2, 2] - Fn[1, 2] * Fn[2, 0]) \
-                    + Fn[0, 2] * (Fn[1, 0] * Fn[2, 1] - Fn[1, 1] * Fn[2, 0])
-                if not J > 0.0:
-                    status[i] = 99
-                    J = 1.0
-                for k in range(3):
-                    for l in range(3):
-                        s = 0.0
-                        for q in range(3):
-                            s += P[k, q] * Fn[l, q]
-                        sigma[i, k, l] = s / J
+                status[i] = hyperelastic_update(F[i], L, dt, hist[i], prm[mat_id[i]], hist_new[i],
+                                                sigma[i], Fn, P, A)
+            elif d == 2:
+                _jaumann_update_2d(sigma[i], L, lam[i], mu[i], dt)
             else:
-                D01 = 0.5 * (L01 + L10)
-                W01 = 0.5 * (L01 - L10)  # Ω = [[0, W01], [−W01, 0]]
-                s00 = sigma[i, 0, 0]
-                s01 = sigma[i, 0, 1]
-                s11 = sigma[i, 1, 1]
-                # Ω σ − σ Ω for the in-plane block
-                j00 = 2.0 * W01 * s01
-                j11 = -2.0 * W01 * s01
-                j01 = W01 * (s11 - s00)
-                sigma[i, 0, 0] = s00 + dt * (lam * trD + 2.0 * mu * L00 + j00)
-                sigma[i, 1, 1] = s11 + dt * (lam * trD + 2.0 * mu * L11 + j11)
-                sigma[i, 0, 1] = s01 + dt * (2.0 * mu * D01 + j01)
-                sigma[i, 1, 0] = sigma[i, 0, 1]
-                sigma[i, 2, 2] = sigma[i, 2, 2] + dt * lam * trD
+                jaumann_update(sigma[i], L, lam[i], mu[i], dt, T)
             if eps_as > 0.0:
-                # principal stresses of the in-plane block
-                a = sigma[i, 0, 0]
-                b = sigma[i, 1, 1]
-                s = sigma[i, 0, 1]
-                th = 0.5 * math.atan2(2.0 * s, a - b)
-                cs = math.cos(th)
-                sn = math.sin(th)
-                p1 = a * cs * cs + 2.0 * s * cs * sn + b * sn * sn
-                p2 = a * sn * sn - 2.0 * s * cs * sn + b * cs * cs
-                ri2 = 1.0 / (rho_new[i] * rho_new[i])
-                r1 = -eps_as * p1 * ri2 if p1 > 0.0 else 0.0
-                r2 = -eps_as * p2 * ri2 if p2 > 0.0 else 0.0
-                R[i, 0, 0] = r1 * cs * cs + r2 * sn * sn
-                R[i, 1, 1] = r1 * sn * sn + r2 * cs * cs
-                R[i, 0, 1] = (r1 - r2) * cs * sn
-                R[i, 1, 0] = R[i, 0, 1]
-    return R
+                artificial_stress_row(i, sigma, rho_new[i], eps_as, d, R, Fn, T)
 
+
+# ================================================================================================
+# Forces (eq. 1)
+# ================================================================================================
 
 @njit(inline="always", **JIT)
-def _force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n_as, w_dx):
-    """Acceleration of particle i: Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij) ∇_i W_ij."""
+def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx):
+    """2-D specialisation of :func:`force_row`, returning (a_x, a_y)."""
     ax = 0.0
     ay = 0.0
     ri2 = 1.0 / (rho[i] * rho[i])
+    si00 = sigma[i, 0, 0] * ri2
+    si01 = sigma[i, 0, 1] * ri2
+    si10 = sigma[i, 1, 0] * ri2
+    si11 = sigma[i, 1, 1] * ri2
     for p in range(indptr[i], indptr[i + 1]):
         j = indices[p]
         dx0 = x[i, 0] - x[j, 0]
@@ -154,10 +276,10 @@ def _force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n
         gx = g * dx0
         gy = g * dx1
         rj2 = 1.0 / (rho[j] * rho[j])
-        t00 = sigma[i, 0, 0] * ri2 + sigma[j, 0, 0] * rj2
-        t01 = sigma[i, 0, 1] * ri2 + sigma[j, 0, 1] * rj2
-        t10 = sigma[i, 1, 0] * ri2 + sigma[j, 1, 0] * rj2
-        t11 = sigma[i, 1, 1] * ri2 + sigma[j, 1, 1] * rj2
+        t00 = si00 + sigma[j, 0, 0] * rj2
+        t01 = si01 + sigma[j, 0, 1] * rj2
+        t10 = si10 + sigma[j, 1, 0] * rj2
+        t11 = si11 + sigma[j, 1, 1] * rj2
         if n_as > 0:
             f = (kernel_w(r, h, 0, 2) / w_dx) ** n_as
             t00 += f * (R[i, 0, 0] + R[j, 0, 0])
@@ -167,7 +289,8 @@ def _force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n
         vr = (v[i, 0] - v[j, 0]) * dx0 + (v[i, 1] - v[j, 1]) * dx1
         if vr < 0.0 and (alpha > 0.0 or beta > 0.0):
             mu_ij = h * vr / (r2 + 0.01 * h * h)
-            pi_ij = (-alpha * c0 * mu_ij + beta * mu_ij * mu_ij) / (0.5 * (rho[i] + rho[j]))
+            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
+                     / (0.5 * (rho[i] + rho[j])))
             t00 -= pi_ij
             t11 -= pi_ij
         ax += m[j] * (t00 * gx + t01 * gy)
@@ -175,19 +298,68 @@ def _force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n
     return ax, ay
 
 
+@njit(inline="always", **JIT)
+def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, out):
+    """Eq. 1 for particle i, any d:
+    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij into out[i] (d,), m/s²."""
+    d = x.shape[1]
+    for k in range(d):
+        out[i, k] = 0.0
+    ri2 = 1.0 / (rho[i] * rho[i])
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        r2 = 0.0
+        vr = 0.0
+        for k in range(d):
+            e = x[i, k] - x[j, k]
+            r2 += e * e
+            vr += (v[i, k] - v[j, k]) * e
+        r = math.sqrt(r2)
+        if r <= 0.0:
+            continue
+        g = m[j] * dw_dr(r, h, 0, d) / r
+        rj2 = 1.0 / (rho[j] * rho[j])
+        f = (kernel_w(r, h, 0, d) / w_dx) ** n_as if n_as > 0 else 0.0
+        pi_ij = 0.0
+        if vr < 0.0 and (alpha > 0.0 or beta > 0.0):
+            mu_ij = h * vr / (r2 + 0.01 * h * h)
+            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
+                     / (0.5 * (rho[i] + rho[j])))
+        for k in range(d):
+            s = 0.0
+            for l in range(d):
+                t = sigma[i, k, l] * ri2 + sigma[j, k, l] * rj2
+                if n_as > 0:
+                    t += f * (R[i, k, l] + R[j, k, l])
+                s += t * (x[i, l] - x[j, l])
+            s -= pi_ij * (x[i, k] - x[j, k])
+            out[i, k] += g * s
+
+
 @njit(parallel=True, **JIT)
-def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n_as, w_dx, a_ext,
+def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
                acc, fixed, v_fix, dt, damping, do_kick):
-    """Accelerations (N,2) into ``acc`` and, with ``do_kick``, the closing half kick (step 4–5).
-    The kick is a separate loop: the viscosity reads the neighbours' velocities, which must not be
-    kicked while they are read. Returns the number of non-finite accelerations."""
-    N = x.shape[0]
+    """Accelerations (N, d) into ``acc`` (eq. 1 plus a_ext (N, d), m/s²; c (N,) the particles'
+    P-wave speeds, m/s) and, with ``do_kick``, the closing half kick (step 4–5). The kick is a
+    separate loop: the viscosity reads the neighbours' velocities, which must not be kicked while
+    they are read. Returns the number of non-finite accelerations."""
+    N, d = x.shape
     bad = 0
     for i in prange(N):
-        ax, ay = _force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n_as, w_dx)
-        acc[i, 0] = ax + a_ext[i, 0]
-        acc[i, 1] = ay + a_ext[i, 1]
-        if not (math.isfinite(acc[i, 0]) and math.isfinite(acc[i, 1])):
+        if d == 2:
+            ax, ay = _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
+                                   n_as, w_dx)
+            acc[i, 0] = ax + a_ext[i, 0]
+            acc[i, 1] = ay + a_ext[i, 1]
+        else:
+            force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx,
+                      acc)
+            for k in range(d):
+                acc[i, k] += a_ext[i, k]
+        ok = True
+        for k in range(d):
+            ok = ok and math.isfinite(acc[i, k])
+        if not ok:
             bad += 1
     if do_kick:
         for i in prange(N):
@@ -195,15 +367,22 @@ def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c0, alpha, beta, n_as
     return bad
 
 
-class Body:
-    """Particles, material and options of a classic-SPH body; ``step`` advances it (Fig. 6 of 003).
+# ================================================================================================
+# A body
+# ================================================================================================
 
-    X (N,2) reference positions, V (N,) volumes (m²), dx spacing; options: ``h_ratio`` (h/Δx),
-    ``stress`` ('hypoelastic' | 'hyperelastic'), ``alpha``, ``beta`` (artificial viscosity),
-    ``artificial_stress`` (ε of Gray et al., 0 = off), ``n_as`` (exponent, 4)."""
+class Body:
+    """Particles, materials and options of a classic-SPH body; ``step`` advances it (Fig. 6 of 003).
+
+    X (N, d) reference positions, m (d = 2: plane strain, or 3); V (N,) volumes, m^d; ``material``
+    a :class:`~workbench.materials.Material` or a :class:`~workbench.materials.MaterialTable` with
+    ``mat_id`` (N,) its row per particle (the particle's density ρ0, wave speed, λ and μ or law);
+    dx spacing, m; options: ``h_ratio`` (h/Δx), ``stress`` ('hypoelastic' | 'hyperelastic'),
+    ``alpha``, ``beta`` (artificial viscosity), ``artificial_stress`` (ε of Gray et al., 0 = off),
+    ``n_as`` (exponent, 4); ``damping`` mass-proportional, 1/s."""
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
-                 artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None):
+                 artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
@@ -211,48 +390,71 @@ class Body:
         if not (alpha >= 0 and beta >= 0):
             raise ValueError("alpha, beta: artificial-viscosity coefficients must be >= 0")
         if not (0 <= artificial_stress <= 1):
-            raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie in [0, 1]")
-        if stress == "hypoelastic" and material.law not in ("svk", "neo_hooke"):
-            raise ValueError(f"stress: 'hypoelastic' uses the small-strain λ, μ of an elastic law; "
-                             f"law {material.law!r} needs stress='hyperelastic'")
-        self.material = material
+            raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie "
+                             "in [0, 1]")
+        table = MaterialTable.of(material)
+        if stress == "hypoelastic":
+            for mt in table.materials:
+                if mt.law not in HYPOELASTIC_LAWS:
+                    raise ValueError(f"stress: 'hypoelastic' uses the small-strain λ, μ of an "
+                                     f"elastic law; law {mt.law!r} needs stress='hyperelastic'")
         self.X = np.ascontiguousarray(X, dtype=np.float64)
-        N = self.X.shape[0]
+        N, d = self.X.shape
+        if d not in (2, 3):
+            raise ValueError(f"X: {d}-D positions are not allowed; 2-D (plane strain) or 3-D")
+        self.table = table
+        self.mat_id = (np.zeros(N, np.int64) if mat_id is None
+                       else np.ascontiguousarray(mat_id, dtype=np.int64))
+        mid = self.mat_id
+        if mid.shape != (N,) or (N and not (0 <= mid.min() and mid.max() < len(table))):
+            raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
+                             "(rows of the material table)")
+        mats = table.materials
+        row = self.mat_id
         self.dx = float(dx)
         self.h = h_ratio * dx
-        self.rho0 = material.rho
-        self.m = material.rho * np.asarray(V, dtype=np.float64)
+        self.rho0 = np.array([mt.rho for mt in mats])[row]
+        self.lam = np.ascontiguousarray(np.array([mt.lam for mt in mats])[row])
+        self.mu = np.ascontiguousarray(np.array([mt.mu for mt in mats])[row])
+        self.c = np.ascontiguousarray(np.array([mt.wave_speed("strain") for mt in mats])[row])
         self.V0 = np.asarray(V, dtype=np.float64)
+        self.m = self.rho0 * self.V0
         self.hyper = stress == "hyperelastic"
         self.alpha, self.beta = float(alpha), float(beta)
         self.eps_as = float(artificial_stress)
         self.n_as = int(n_as) if artificial_stress > 0 else 0
-        self.w_dx = kernel_w(self.dx, self.h, 0, 2)
-        self.c0 = material.wave_speed("strain")
-        self.prm = material.params()
+        self.w_dx = kernel_w(self.dx, self.h, 0, d)
+        self.c0 = float(self.c.max())
+        self.prm = table.params()
         self.x = self.X.copy()
-        self.v = np.zeros((N, 2)) if v0 is None else np.array(v0, dtype=np.float64)
-        self.acc = np.zeros((N, 2))
-        self.rho = np.full(N, material.rho)
-        self.rho_new = np.full(N, material.rho)
+        self.v = np.zeros((N, d)) if v0 is None else np.array(v0, dtype=np.float64)
+        self.acc = np.zeros((N, d))
+        self.rho = self.rho0.copy()
+        self.rho_new = self.rho0.copy()
         self.sigma = np.zeros((N, 3, 3))
         self.F = np.tile(np.eye(3), (N, 1, 1))
-        self.hist = material.initial_history(N)
-        self.hist_new = material.initial_history(N)
+        self.hist = table.initial_history(self.mat_id)
+        self.hist_new = self.hist.copy()
         self.status = np.zeros(N, np.int64)
-        self.fixed = np.zeros((N, 2), np.uint8) if fixed is None else np.ascontiguousarray(fixed, np.uint8)
-        self.v_fix = np.zeros((N, 2))
-        self.a_ext = np.zeros((N, 2))
+        self.fixed = (np.zeros((N, d), np.uint8) if fixed is None
+                      else np.ascontiguousarray(fixed, np.uint8))
+        self.v_fix = np.zeros((N, d))
+        self.a_ext = np.zeros((N, d))
+        self.damping = 0.0
         self.t = 0.0
         self.steps = 0
-        self.R = np.zeros((N, 2, 2))
-        self.extra_force = None  # callable(body) -> (N,2) forces, e.g. contact between bodies
+        self.R = np.zeros((N, d, d))
+        self.extra_force = None  # callable(body) -> (N, d) forces, e.g. contact between bodies
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
         self._accelerations(0.0, kick=False)
 
     @property
     def n(self) -> int:
         return self.X.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.X.shape[1]
 
     def _neighbours(self, x):
         """The shared cell list at the current positions; particles of different bodies
@@ -262,34 +464,35 @@ class Body:
             indptr, indices = drop_cross_body(indptr, indices, self.body)
         return indptr, indices
 
+    def _a_ext(self):
+        if self.extra_force is None:
+            return self.a_ext
+        return self.a_ext + self.extra_force(self) / self.m[:, None]
+
     def _accelerations(self, dt, kick):
         self.indptr, self.indices = self._neighbours(self.x)
-        a_ext = self.a_ext
-        if self.extra_force is not None:
-            a_ext = a_ext + self.extra_force(self) / self.m[:, None]
         return force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
-                          self.indices, self.h, self.c0, self.alpha, self.beta, self.n_as,
-                          self.w_dx, a_ext, self.acc, self.fixed, self.v_fix, dt, 0.0, kick)
+                          self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
+                          self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
+                          self.damping, kick)
 
     def step(self, dt: float, n: int = 1) -> int:
         """``n`` steps of size dt; returns the steps completed (fewer if the state became
         non-finite or a material point failed)."""
-        lam, mu = self.material.lam, self.material.mu
         for s in range(n):
-            kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, 0.0)
+            kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
             self.indptr, self.indices = self._neighbours(self.x)
-            self.R = rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
-                                self.indptr, self.indices, self.h, dt, lam, mu, self.hyper, self.prm,
-                                self.hist, self.hist_new, self.eps_as, self.status)
+            rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
+                       self.indptr, self.indices, self.h, dt, self.lam, self.mu, self.hyper,
+                       self.prm, self.mat_id, self.hist, self.hist_new, self.eps_as, self.status,
+                       self.R)
             self.rho, self.rho_new = self.rho_new, self.rho
-            if self.material.n_history:
+            if self.hist.shape[1]:
                 self.hist, self.hist_new = self.hist_new, self.hist
-            a_ext = self.a_ext
-            if self.extra_force is not None:
-                a_ext = a_ext + self.extra_force(self) / self.m[:, None]
             bad = force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
-                             self.indices, self.h, self.c0, self.alpha, self.beta, self.n_as,
-                             self.w_dx, a_ext, self.acc, self.fixed, self.v_fix, dt, 0.0, True)
+                             self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
+                             self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
+                             self.damping, True)
             self.t += dt
             self.steps += 1
             if bad or self.status.any() or not np.isfinite(self.x).all():
@@ -297,31 +500,33 @@ class Body:
         return n
 
     def forces(self) -> np.ndarray:
-        """Particle forces m a (N,2) of the current state (no external load)."""
+        """Particle forces m a (N, d) of the current state (no external load), N."""
         acc = np.zeros_like(self.acc)
         indptr, indices = self._neighbours(self.x)
         force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, indptr, indices, self.h,
-                   self.c0, self.alpha, self.beta, self.n_as, self.w_dx, np.zeros_like(self.acc),
+                   self.c, self.alpha, self.beta, self.n_as, self.w_dx, np.zeros_like(self.acc),
                    acc, self.fixed, self.v_fix, 0.0, 0.0, False)
         return acc * self.m[:, None]
 
     def energies(self) -> tuple[float, float]:
-        """(kinetic, stored) energy, J per unit thickness. Stored energy: hyperelastic, Σ V0 ψ(F)
-        by the shared diagnostics; hypoelastic, the linear-elastic complementary energy
-        Σ (m/ρ) ½ σ : C⁻¹ : σ (plane strain, σ_zz included)."""
+        """(kinetic, stored) energy, J (J per unit thickness in 2-D). Stored energy: hyperelastic,
+        Σ V0 ψ(F) by the shared diagnostics; hypoelastic, the linear-elastic complementary energy
+        Σ (m/ρ) ½ σ : C⁻¹ : σ = Σ (m/ρ) [σ:σ − λ/(3λ + 2μ) (tr σ)²]/(4μ) with each particle's λ, μ
+        (plane strain: σ_zz included)."""
         ke = 0.5 * float(np.sum(self.m[:, None] * self.v * self.v))
         if self.hyper:
             from .diagnostics import strain_energy
 
-            return ke, strain_energy(np.ascontiguousarray(self.F), self.V0, self.prm)
-        E, nu = self.material.E, self.material.nu
+            return ke, strain_energy(np.ascontiguousarray(self.F), self.V0, self.prm, self.mat_id)
         s = self.sigma
         tr = s[:, 0, 0] + s[:, 1, 1] + s[:, 2, 2]
         ss = np.einsum("nij,nij->n", s, s)
-        w = ((1 + nu) * ss - nu * tr * tr) / (2 * E)
+        lam, mu = self.lam, self.mu
+        w = (ss - lam / (3 * lam + 2 * mu) * tr * tr) / (4 * mu)
         return ke, float(np.sum(self.m / self.rho * w))
 
     def time_step(self, dt_factor: float) -> float:
+        """dt = dt_factor · Δx / c, c the fastest P-wave speed of the body's materials, s."""
         return cfl_time_step(self.dx, self.c0, dt_factor)
 
 
@@ -332,7 +537,8 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 
 
 
 class Classic(ParticleBody):
-    """A classic-SPH body built from :class:`sph.particles.Particles` (2-D, one material)."""
+    """A classic-SPH body built from :class:`sph.particles.Particles`: 2-D plane strain or 3-D, a
+    row of the particles' material table per particle."""
 
     name = NAME
 
@@ -341,22 +547,22 @@ class Classic(ParticleBody):
                  n_as: int = 4):
         super().__init__(particles)
         ps = particles
-        if ps.dim != 2 or ps.plane == "stress":
-            raise ValueError("sph: plane strain (2-D) only in this version; the model is "
-                             f"{ps.dim}-D{' plane stress' if ps.plane == 'stress' else ''}")
-        if len(ps.table) != 1:
-            raise ValueError(f"sph: one material per body in this version (the model has {len(ps.table)})")
-        self.b = Body(ps.X, ps.V, ps.table[0], ps.dx, h_ratio, stress, alpha, beta,
-                      artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None)
+        if ps.plane == "stress":
+            raise ValueError("plane: 'stress' is not modelled by sph (plane strain: L_zz = 0); "
+                             "allowed: 'strain' or a 3-D model")
+        self.b = Body(ps.X, ps.V, ps.table, ps.dx, h_ratio, stress, alpha, beta,
+                      artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
+                      mat_id=ps.mat_id)
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
 
-    def _set_loads(self, f_ext, fixed=None, v_fix=None, extra=None):
+    def _set_loads(self, f_ext, fixed=None, v_fix=None, extra=None, damping=0.0):
         b = self.b
         b.a_ext = f_ext / self.m[:, None]
         if fixed is not None:
             b.fixed[:] = fixed
             b.v_fix[:] = v_fix
+        b.damping = float(damping)
         b.extra_force = None if extra is None else (lambda bb: extra(bb.x))
 
     def start(self, v0, f_ext, extra=None) -> None:
@@ -365,14 +571,17 @@ class Classic(ParticleBody):
         self.b._accelerations(0.0, kick=False)
 
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
-        if damping:
-            raise ValueError("damping: classic SPH dissipates through its artificial viscosity; "
-                             "mass damping is not supported (allowed: 0)")
-        self._set_loads(f_ext, fixed, v_fix, extra)
+        if not (damping >= 0 and math.isfinite(damping)):
+            raise ValueError(f"damping: {damping!r} is not allowed; mass damping must be >= 0 "
+                             "(1/s)")
+        self._set_loads(f_ext, fixed, v_fix, extra, damping)
         done = self.b.step(dt, n)
         self.t, self.steps = self.b.t, self.b.steps
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
         return done
+
+    def time_step(self, dt_factor: float) -> float:
+        return self.b.time_step(dt_factor)
 
     def energies(self) -> tuple[float, float]:
         return self.b.energies()

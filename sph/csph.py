@@ -113,8 +113,9 @@ def wls(ps, re_ratio: float | None = None, body=None) -> tl.Discretisation:
     :func:`discretise`."""
     from . import hpm
 
-    model = hpm.build_model(ps.X, ps.V, ps.table[0], ps.dx,
-                            hpm.RE_RATIO if re_ratio is None else re_ratio, body=body)
+    model = hpm.build_model(ps.X, ps.V, ps.table, ps.dx,
+                            hpm.RE_RATIO if re_ratio is None else re_ratio, body=body,
+                            mat_id=ps.mat_id)
     disc = hpm.wls_discretisation(model)
     disc.m = np.ascontiguousarray(ps.m, dtype=np.float64)
     return disc

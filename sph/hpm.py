@@ -1,54 +1,63 @@
-"""Hamiltonian particle method (HPM; Suzuki & Koshizuka 2008, as used in 004 §II), 2-D plane strain,
-total Lagrangian.
+"""Hamiltonian particle method (HPM; Suzuki & Koshizuka 2008, as used in 004 §II), total Lagrangian,
+2-D plane strain and 3-D, a material (a row of the body's
+:class:`~workbench.materials.MaterialTable`) per particle.
 
 Everything weight-related is computed once in the reference configuration X (the *Lagrangian
 kernel*): neighbours within the influence radius r_e (:mod:`sph.neighbours`), the weights
 
     w_ij = 1 − |X_ij|²/r_e²  for |X_ij| < r_e, 0 otherwise            (eq. 6, X_ij = X_j − X_i)
 
-and the moment matrices A_i = Σ_j w_ij X_ij ⊗ X_ij (eq. 5, :func:`reference_geometry`). Then per
-evaluation:
+and the moment matrices A_i = Σ_j w_ij X_ij ⊗ X_ij (eq. 5, d × d, :func:`reference_geometry`).
+Then per evaluation:
 
-* the deformation gradient by weighted least squares, F_i = (Σ_j w_ij x_ij ⊗ X_ij) A_i⁻¹ (eq. 4):
-  exact for every affine motion on any particle arrangement (F is 3×3, F33 = 1, plane strain);
-* P_i = F_i S_i from the shared material library
-  (:func:`workbench.materials.kernels.material_point`: SVK eq. 11, Mooney–Rivlin-like eq. 12);
+* the deformation gradient by weighted least squares, F_i = (Σ_j w_ij x_ij ⊗ X_ij) A_i⁻¹ (eq. 4,
+  :func:`deformation_gradient_row`): exact for every affine motion on any particle arrangement (F is
+  3×3; in 2-D F33 = 1, plane strain);
+* P_i = F_i S_i from the shared material library, row ``prm[mat_id[i]]`` of the table
+  (:func:`workbench.materials.kernels.material_point`; a body of Saint Venant–Kirchhoff materials,
+  eq. 11, calls that law directly; Mooney–Rivlin-like eq. 12, J2, … through the dispatch);
 * the force as the exact derivative of the discrete Hamiltonian H = ½ Σ m_i v_i² + Σ_i V_i ψ(F_i):
   since ∂F_i/∂x_k = Σ_j (δ_jk − δ_ik) e ⊗ A_i⁻¹ X_ij w_ij,
 
       f_i = −∂H/∂x_i = Σ_j w_ij (M_i + M_j) X_ij,   M_i = V_i P_i A_i⁻¹       (eq. 7 times m_i)
 
-  (:func:`internal_force`). The pair term is antisymmetric (X_ji = −X_ij, the bracket symmetric), so
-  Σ f = 0 exactly; H is invariant under rigid rotations of x, so the torque vanishes too.
+  (:func:`stress_pass` gives M, :func:`internal_force` the sum). The pair term is antisymmetric
+  (X_ji = −X_ij, the bracket symmetric), so Σ f = 0 exactly; H is invariant under rigid rotations of
+  x, so the torque vanishes too.
 
 Zero-energy-mode stabilisation (after Kondo, Suzuki & Koshizuka 2010, who add to the Hamiltonian a
 potential that penalises the particle motion the affine map F_i does not see): we use
 
-    H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|²,   c_i = α G V_i / Σ_j w_ij |X_ij|²
+    H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|²,   c_i = α G_i V_i / Σ_j w_ij |X_ij|²
+    (:func:`stabilisation_energy`)
 
-with α = ``stabilisation`` (0: off) and G the small-strain shear modulus. Because F_i minimises
-Σ_j w_ij |x_ij − F X_ij|² (that is eq. 4), ∂H_s/∂F_i = 0 and the force is simply
-f_i += 2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)], antisymmetric, conservative and
-objective: energy and both momenta stay conserved. (The exact normalisation of Kondo et al. was not
-available here; this is our formulation of the same idea, stated so it can be checked.)
+with α = ``stabilisation`` (0: off) and G_i the small-strain shear modulus of particle i's material.
+Because F_i minimises Σ_j w_ij |x_ij − F X_ij|² (that is eq. 4), ∂H_s/∂F_i = 0 and the force is
+simply f_i += 2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)], antisymmetric,
+conservative and objective: energy and both momenta stay conserved. (The exact normalisation of
+Kondo et al. was not available here; this is our formulation of the same idea, stated so it can be
+checked.)
 
-Time integration: the symplectic scheme of eq. 8 (x^{n+1} = x^n + Δt v^n, v^{n+1} = v^n + Δt a^{n+1}).
-Its positions are those of the leapfrog; we run it in the kick–drift–kick (velocity Verlet) form of
-the shared :mod:`sph.integrate` (``scheme="verlet"``, default) so that velocities — and hence the
-reported energies — are synchronous with positions; ``scheme="euler"`` runs eq. 8 literally.
+Time integration (:func:`advance`): the symplectic scheme of eq. 8 (x^{n+1} = x^n + Δt v^n,
+v^{n+1} = v^n + Δt a^{n+1}). Its positions are those of the leapfrog; we run it in the
+kick–drift–kick (velocity Verlet) form of the shared :mod:`sph.integrate` (``scheme="verlet"``,
+default) so that velocities — and hence the reported energies — are synchronous with positions;
+``scheme="euler"`` runs eq. 8 literally.
 
-:func:`solve` dispatches on the scene (Plate, Cantilever, and the stability scenes of
-:mod:`workbench.scenes.stability`).
+The compiled kernels are written for any d (loops over the d components) with 2-D
+specialisations (scalar accumulation) on the hot path of the plane-strain time loop. The body of
+the driver is :class:`HPM` (:func:`build`); :func:`wls_discretisation` gives its gradient form
+(static Newton, modal solve).
 """
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, prange
 
+from workbench.materials import MaterialTable
 from workbench.materials.kernels import material_point, svk_point
 
 from .diagnostics import strain_energy
@@ -56,53 +65,94 @@ from .integrate import cfl_time_step, kick_drift_row, kick_row
 from .kernels import JIT, N_CHUNKS
 from .method import ParticleBody
 from .neighbours import drop_cross_body, neighbour_list
+from .total_lagrangian import FASTMATH
 
 RE_RATIO = 2.1
 """Default influence radius r_e over the particle spacing (eq. 6)."""
+SINGULAR = 1e-12
+"""A_i is singular (fewer than d independent neighbour directions) when det A_i is below this
+fraction of the product of its diagonal."""
 
 
 # ================================================================================================
 # Reference configuration (eq. 5, 6)
 # ================================================================================================
 
+@njit(inline="always", **JIT)
+def _invert_moment(a00, a01, a02, a11, a12, a22, d, Ainv):
+    """A⁻¹ of the symmetric moment matrix of eq. 5 (entries a_kl, k ≤ l; the a_k2 unused in 2-D)
+    into Ainv (d, d). Returns 1 (and Ainv = 0) when A is singular, else 0."""
+    if d == 2:
+        det = a00 * a11 - a01 * a01
+        if not det > SINGULAR * (a00 * a11 + 1e-300):
+            for k in range(2):
+                for l in range(2):
+                    Ainv[k, l] = 0.0
+            return 1
+        Ainv[0, 0] = a11 / det
+        Ainv[1, 1] = a00 / det
+        Ainv[0, 1] = -a01 / det
+        Ainv[1, 0] = -a01 / det
+        return 0
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if not det > SINGULAR * (a00 * a11 * a22 + 1e-300):
+        for k in range(3):
+            for l in range(3):
+                Ainv[k, l] = 0.0
+        return 1
+    Ainv[0, 0] = c00 / det
+    Ainv[1, 1] = c11 / det
+    Ainv[2, 2] = c22 / det
+    Ainv[0, 1] = Ainv[1, 0] = c01 / det
+    Ainv[0, 2] = Ainv[2, 0] = c02 / det
+    Ainv[1, 2] = Ainv[2, 1] = c12 / det
+    return 0
+
+
 @njit(parallel=True, **JIT)
 def reference_geometry(X, indptr, indices, re, X_ij, w, Ainv, wr2):
-    """Fill, per pair p of the CSR list, X_ij[p] = X_j − X_i and w[p] (eq. 6); per particle the
-    inverse moment matrix Ainv[i] = A_i⁻¹ (eq. 5) and wr2[i] = Σ_j w_ij |X_ij|². Returns the number
-    of particles whose A_i is singular (fewer than two independent neighbour directions)."""
-    N = X.shape[0]
+    """Fill, per pair p of the CSR list, X_ij[p] = X_j − X_i (nnz, d) and the weight w[p] of eq. 6;
+    per particle the inverse moment matrix Ainv[i] = A_i⁻¹ (N, d, d) of eq. 5 and
+    wr2[i] = Σ_j w_ij |X_ij|² (m²). X (N, d), m; re the influence radius r_e, m. Returns the number
+    of particles whose A_i is singular (fewer than d independent neighbour directions)."""
+    N, d = X.shape
+    re2 = re * re
     bad = np.zeros(N, np.int64)
     for i in prange(N):
         a00 = 0.0
         a01 = 0.0
+        a02 = 0.0
         a11 = 0.0
+        a12 = 0.0
+        a22 = 0.0
         s = 0.0
         for p in range(indptr[i], indptr[i + 1]):
             j = indices[p]
-            dx = X[j, 0] - X[i, 0]
-            dy = X[j, 1] - X[i, 1]
-            r2 = dx * dx + dy * dy
-            wij = 1.0 - r2 / (re * re) if r2 < re * re else 0.0
-            X_ij[p, 0] = dx
-            X_ij[p, 1] = dy
+            r2 = 0.0
+            for k in range(d):
+                e = X[j, k] - X[i, k]
+                X_ij[p, k] = e
+                r2 += e * e
+            wij = 1.0 - r2 / re2 if r2 < re2 else 0.0
             w[p] = wij
-            a00 += wij * dx * dx
-            a01 += wij * dx * dy
-            a11 += wij * dy * dy
+            e0 = X_ij[p, 0]
+            e1 = X_ij[p, 1]
+            e2 = X_ij[p, 2] if d == 3 else 0.0
+            a00 += wij * e0 * e0
+            a01 += wij * e0 * e1
+            a02 += wij * e0 * e2
+            a11 += wij * e1 * e1
+            a12 += wij * e1 * e2
+            a22 += wij * e2 * e2
             s += wij * r2
-        det = a00 * a11 - a01 * a01
         wr2[i] = s
-        if not det > 1e-12 * (a00 * a11 + 1e-300):
-            bad[i] = 1
-            Ainv[i, 0, 0] = 0.0
-            Ainv[i, 0, 1] = 0.0
-            Ainv[i, 1, 0] = 0.0
-            Ainv[i, 1, 1] = 0.0
-        else:
-            Ainv[i, 0, 0] = a11 / det
-            Ainv[i, 1, 1] = a00 / det
-            Ainv[i, 0, 1] = -a01 / det
-            Ainv[i, 1, 0] = -a01 / det
+        bad[i] = _invert_moment(a00, a01, a02, a11, a12, a22, d, Ainv[i])
     return bad.sum()
 
 
@@ -111,8 +161,8 @@ def reference_geometry(X, indptr, indices, re, X_ij, w, Ainv, wr2):
 # ================================================================================================
 
 @njit(inline="always", **JIT)
-def _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F):
-    """F (3×3, F33 = 1) of particle i by weighted least squares (eq. 4)."""
+def _deformation_gradient_row_2d(i, x, indptr, indices, X_ij, w, Ainv, F):
+    """2-D specialisation of :func:`deformation_gradient_row` (scalar accumulation, F33 = 1)."""
     b00 = 0.0
     b01 = 0.0
     b10 = 0.0
@@ -137,36 +187,119 @@ def _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F):
     F[2, 2] = 1.0
 
 
+@njit(inline="always", **JIT)
+def deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, B, F):
+    """Eq. 4 for particle i, any d: F_i = (Σ_j w_ij x_ij ⊗ X_ij) A_i⁻¹ into the 3×3 F (F33 = 1 in
+    2-D); B (3, 3) scratch."""
+    d = x.shape[1]
+    for k in range(3):
+        for l in range(3):
+            B[k, l] = 0.0
+            F[k, l] = 0.0
+    if d == 2:
+        F[2, 2] = 1.0
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        wij = w[p]
+        for k in range(d):
+            u = wij * (x[j, k] - x[i, k])
+            for l in range(d):
+                B[k, l] += u * X_ij[p, l]
+    for k in range(d):
+        for l in range(d):
+            s = 0.0
+            for m in range(d):
+                s += B[k, m] * Ainv[i, m, l]
+            F[k, l] = s
+
+
+@njit(inline="always", **JIT)
+def _count_failed(status):
+    """Number of non-zero material status codes (counted after the parallel loop: a reduction
+    inside it costs the 2-D plate a few per cent)."""
+    n = 0
+    for i in range(status.shape[0]):
+        if status[i] != 0:
+            n += 1
+    return n
+
+
+@njit(parallel=True, fastmath=FASTMATH, **JIT)
+def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, F_all, M,
+                h_new, status):
+    """For every particle, any d: F_i (eq. 4, :func:`deformation_gradient_row`) into F_all
+    (N, 3, 3); P_i from the shared material library with the parameter row prm[mat_id[i]] (prm
+    (n_mat, N_PARAMS) the material table; ``all_svk``: every row is Saint Venant–Kirchhoff, whose
+    law is called directly, without dispatch or history); M_i = V_i P_i A_i⁻¹ into M (N, d, d),
+    Pa·m^(d−2) — the per-particle factor of eq. 7. History h_old → h_new (N, n_history);
+    ``status`` (N,) gets the material routine's return code (0 ok). Returns the number of failed
+    points (status ≠ 0). :func:`_stress_pass_2d` is its plane-strain specialisation (the time
+    loop's hot path)."""
+    N, d = x.shape
+    chunk = (N + N_CHUNKS - 1) // N_CHUNKS
+    for c in prange(N_CHUNKS):
+        F = np.empty((3, 3))
+        B = np.empty((3, 3))
+        P = np.empty((3, 3))
+        A = np.empty((3, 3, 3, 3))
+        cur = mat_id[c * chunk] if c * chunk < N else 0
+        row = prm[cur]  # the material row, switched only where mat_id changes (regions are runs)
+        for i in range(c * chunk, min(N, (c + 1) * chunk)):
+            if mat_id[i] != cur:
+                cur = mat_id[i]
+                row = prm[cur]
+            deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, B, F)
+            if all_svk:
+                status[i] = svk_point(F, row, P, A, False)
+            else:
+                status[i] = material_point(F, h_old[i], row, P, h_new[i], A, False)
+            for k in range(3):
+                for l in range(3):
+                    F_all[i, k, l] = F[k, l]
+            vi = V[i]
+            for k in range(d):
+                for l in range(d):
+                    s = 0.0
+                    for q in range(d):
+                        s += P[k, q] * Ainv[i, q, l]
+                    M[i, k, l] = vi * s
+    return _count_failed(status)
+
+
 @njit(parallel=True, **JIT)
-def stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_new, status):
-    """For every particle: F_i (eq. 4) into F_all (N,3,3), P_i from the shared material library, and
-    M_i = V_i P_i A_i⁻¹ (N,2,2) — the per-particle factor of eq. 7. ``status`` (N,) gets the
-    material routine's return code (0 ok)."""
+def _stress_pass_2d(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, F_all, M,
+                    h_new, status):
+    """:func:`stress_pass` in plane strain (d = 2), written out with scalar accumulation; the
+    same arguments and result."""
     N = x.shape[0]
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
-    svk = prm[0] == 0.0  # SVK: the shared law called directly (no dispatch, no history)
     for c in prange(N_CHUNKS):
         F = np.empty((3, 3))
         P = np.empty((3, 3))
         A = np.empty((3, 3, 3, 3))
+        cur = mat_id[c * chunk] if c * chunk < N else 0
+        row = prm[cur]
         for i in range(c * chunk, min(N, (c + 1) * chunk)):
-            _deformation_gradient_row(i, x, indptr, indices, X_ij, w, Ainv, F)
-            if svk:
-                status[i] = svk_point(F, prm, P, A, False)
+            if mat_id[i] != cur:
+                cur = mat_id[i]
+                row = prm[cur]
+            _deformation_gradient_row_2d(i, x, indptr, indices, X_ij, w, Ainv, F)
+            if all_svk:
+                status[i] = svk_point(F, row, P, A, False)
             else:
-                status[i] = material_point(F, h_old[i], prm, P, h_new[i], A, False)
+                status[i] = material_point(F, h_old[i], row, P, h_new[i], A, False)
             for k in range(3):
                 for l in range(3):
                     F_all[i, k, l] = F[k, l]
             for k in range(2):
                 M[i, k, 0] = V[i] * (P[k, 0] * Ainv[i, 0, 0] + P[k, 1] * Ainv[i, 1, 0])
                 M[i, k, 1] = V[i] * (P[k, 0] * Ainv[i, 0, 1] + P[k, 1] * Ainv[i, 1, 1])
+    return _count_failed(status)
 
 
 @njit(inline="always", **JIT)
-def _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab):
-    """f_i = Σ_j w_ij (M_i + M_j) X_ij (eq. 7) plus, where ``stab`` and cs ≠ 0, the stabilisation
-    force."""
+def _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab):
+    """2-D specialisation of :func:`force_row`, returning (f_x, f_y)."""
     fx = 0.0
     fy = 0.0
     mi00 = M[i, 0, 0]
@@ -192,23 +325,55 @@ def _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab):
     return fx, fy
 
 
+@njit(inline="always", **JIT)
+def force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, out):
+    """Eq. 7 for particle i, any d: f_i = Σ_j w_ij (M_i + M_j) X_ij plus, where ``stab`` and
+    c_i or c_j ≠ 0, the stabilisation force
+    2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)];
+    written into out[i] (d,), N (N/m in 2-D)."""
+    d = x.shape[1]
+    for k in range(d):
+        out[i, k] = 0.0
+    for p in range(indptr[i], indptr[i + 1]):
+        j = indices[p]
+        wij = w[p]
+        for k in range(d):
+            s = 0.0
+            for l in range(d):
+                s += (M[i, k, l] + M[j, k, l]) * X_ij[p, l]
+            out[i, k] += wij * s
+        if stab and (cs[i] != 0.0 or cs[j] != 0.0):
+            for k in range(d):
+                xk = x[j, k] - x[i, k]
+                di = xk
+                dj = xk
+                for l in range(d):
+                    di -= F_all[i, k, l] * X_ij[p, l]
+                    dj -= F_all[j, k, l] * X_ij[p, l]
+                out[i, k] += 2.0 * wij * (cs[i] * di + cs[j] * dj)
+
+
 @njit(parallel=True, **JIT)
 def internal_force(x, indptr, indices, X_ij, w, M, F_all, cs):
-    """Internal forces (N,2), N (per unit thickness): −∂(Σ V ψ + H_s)/∂x."""
-    N = x.shape[0]
-    f = np.empty((N, 2))
+    """Internal forces (N, d), N (N per unit thickness in 2-D): −∂(Σ V ψ + H_s)/∂x, from the M and
+    F of :func:`stress_pass` at the same x."""
+    N, d = x.shape
+    f = np.empty((N, d))
     stab = np.any(cs != 0.0)
     for i in prange(N):
-        fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
-        f[i, 0] = fx
-        f[i, 1] = fy
+        if d == 2:
+            fx, fy = _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
+            f[i, 0] = fx
+            f[i, 1] = fy
+        else:
+            force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, f)
     return f
 
 
 @njit(parallel=True, **JIT)
 def stabilisation_energy(x, indptr, indices, X_ij, w, F_all, cs):
-    """H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|², J per unit thickness."""
-    N = x.shape[0]
+    """H_s = Σ_i c_i Σ_j w_ij |x_ij − F_i X_ij|², J (J per unit thickness in 2-D), any d."""
+    N, d = x.shape
     e = np.zeros(N)
     for i in prange(N):
         if cs[i] == 0.0:
@@ -216,47 +381,77 @@ def stabilisation_energy(x, indptr, indices, X_ij, w, F_all, cs):
         s = 0.0
         for p in range(indptr[i], indptr[i + 1]):
             j = indices[p]
-            d0 = x[j, 0] - x[i, 0] - (F_all[i, 0, 0] * X_ij[p, 0] + F_all[i, 0, 1] * X_ij[p, 1])
-            d1 = x[j, 1] - x[i, 1] - (F_all[i, 1, 0] * X_ij[p, 0] + F_all[i, 1, 1] * X_ij[p, 1])
-            s += w[p] * (d0 * d0 + d1 * d1)
+            for k in range(d):
+                r = x[j, k] - x[i, k]
+                for l in range(d):
+                    r -= F_all[i, k, l] * X_ij[p, l]
+                s += w[p] * r * r
         e[i] = cs[i] * s
     return e.sum()
 
 
-@njit(parallel=True, **JIT)
-def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping,
-             indptr, indices, X_ij, w, Ainv, V, h_old, prm, cs, F_all, M, h_new, status):
-    """``n_steps`` steps of eq. 8 (``euler``) or its kick–drift–kick form, in place. Returns the
-    number of steps completed (fewer if a material point failed or a position became non-finite)."""
-    N = x.shape[0]
+@njit(inline="always", **JIT)
+def _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping):
+    """The velocity update closing a step for particle i: eq. 8's v += Δt a (``euler``) or the
+    closing half kick of velocity Verlet."""
+    if euler:
+        for k in range(v.shape[1]):
+            if fixed[i, k]:
+                v[i, k] = v_fix[i, k]
+            else:
+                v[i, k] = (v[i, k] + dt * acc[i, k]) / (1.0 + damping * dt)
+    else:
+        kick_row(i, v, acc, fixed, v_fix, dt, damping)
+
+
+@njit(parallel=True, fastmath=FASTMATH, **JIT)
+def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping, indptr, indices,
+             X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk, cs, F_all, M, h_new, status):
+    """``n_steps`` steps of eq. 8 (``euler``) or its kick–drift–kick form, in place, any d, from the
+    synchronised state (x, v, acc); the history h_old is committed (from h_new) after every step.
+    Returns the number of steps completed (fewer if a material point failed or an acceleration
+    became non-finite)."""
+    N, d = x.shape
+    nh = h_old.shape[1]
     stab = np.any(cs != 0.0)
     for s in range(n_steps):
-        if euler:
-            for i in prange(N):
-                for k in range(2):
+        for i in prange(N):
+            if euler:
+                for k in range(d):
                     if fixed[i, k]:
                         v[i, k] = v_fix[i, k]
                     x[i, k] += dt * v[i, k]
+            else:
+                kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
+        if d == 2:
+            nfail = _stress_pass_2d(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id,
+                                    all_svk, F_all, M, h_new, status)
+        else:
+            nfail = stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, mat_id, all_svk,
+                                F_all, M, h_new, status)
+        bad = 0
+        if d == 2:  # the plane-strain loop on its own: a lean body for the hot path
+            for i in prange(N):
+                fx, fy = _force_row_2d(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
+                acc[i, 0] = fx / m[i] + a_ext[i, 0]
+                acc[i, 1] = fy / m[i] + a_ext[i, 1]
+                _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping)
+                if not (math.isfinite(acc[i, 0]) and math.isfinite(acc[i, 1])):
+                    bad += 1
         else:
             for i in prange(N):
-                kick_drift_row(i, x, v, acc, fixed, v_fix, dt, damping)
-        stress_pass(x, indptr, indices, X_ij, w, Ainv, V, h_old, prm, F_all, M, h_new, status)
-        bad = 0
-        for i in prange(N):
-            fx, fy = _force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab)
-            acc[i, 0] = fx / m[i] + a_ext[i, 0]
-            acc[i, 1] = fy / m[i] + a_ext[i, 1]
-            if euler:
-                for k in range(2):
-                    if fixed[i, k]:
-                        v[i, k] = v_fix[i, k]
-                    else:
-                        v[i, k] = (v[i, k] + dt * acc[i, k]) / (1.0 + damping * dt)
-            else:
-                kick_row(i, v, acc, fixed, v_fix, dt, damping)
-            if status[i] != 0 or not (math.isfinite(acc[i, 0]) and math.isfinite(acc[i, 1])):
-                bad += 1
-        if bad > 0:
+                force_row(i, x, indptr, indices, X_ij, w, M, F_all, cs, stab, acc)
+                for k in range(d):
+                    acc[i, k] = acc[i, k] / m[i] + a_ext[i, k]
+                _end_step_row(i, euler, v, acc, fixed, v_fix, dt, damping)
+                for k in range(d):
+                    if not math.isfinite(acc[i, k]):
+                        bad += 1
+        if nh > 0:
+            for i in prange(N):
+                for k in range(nh):
+                    h_old[i, k] = h_new[i, k]
+        if bad > 0 or nfail > 0:
             return s + 1
     return n_steps
 
@@ -269,8 +464,11 @@ def _advance(n_steps, euler, x, v, acc, m, a_ext, fixed, v_fix, dt, damping,
 class Model:
     """An HPM body: reference geometry and the constant arrays of the loops.
 
-    X (N,2) m, V (N,) m², m (N,) kg/m, CSR neighbours (indptr, indices) within r_e, per pair X_ij
-    (nnz,2) and w (nnz,), Ainv (N,2,2), stabilisation coefficients cs (N,), material ``prm``."""
+    X (N, d) m, V (N,) m^d (m² per unit thickness in 2-D), m (N,) kg (kg/m in 2-D), CSR neighbours
+    (indptr, indices) within r_e, per pair X_ij (nnz, d) and w (nnz,), Ainv (N, d, d), 1/m²,
+    stabilisation coefficients cs (N,); the materials: ``table`` (a MaterialTable), its parameter
+    rows ``prm`` (n_mat, N_PARAMS), ``mat_id`` (N,) a row per particle, ``all_svk`` (every row
+    Saint Venant–Kirchhoff: the direct call)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -284,45 +482,68 @@ class Model:
     Ainv: np.ndarray
     cs: np.ndarray
     prm: np.ndarray
-    material: object
+    table: MaterialTable
+    mat_id: np.ndarray
+    all_svk: bool
     n_singular: int = 0
 
     @property
     def n(self) -> int:
         return self.X.shape[0]
 
+    @property
+    def dim(self) -> int:
+        return self.X.shape[1]
+
+    @property
+    def n_history(self) -> int:
+        return self.table.n_history
+
 
 def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
-          body=None) -> Model:
-    """Reference configuration of an HPM body (eq. 5–6). ``body`` (N,) int, optional: particles
-    of different bodies never interact through the weights (separate bodies, e.g. two rings)."""
+                body=None, mat_id=None) -> Model:
+    """Reference configuration of an HPM body (eq. 5–6): X (N, d) m, d = 2 or 3; V (N,) volumes;
+    ``material`` a :class:`~workbench.materials.Material` or a
+    :class:`~workbench.materials.MaterialTable` with ``mat_id`` (N,) its row per particle (default
+    all 0); dx the spacing, m; r_e = re_ratio·dx. ``body`` (N,) int, optional: particles of
+    different bodies never interact through the weights (separate bodies, e.g. two rings)."""
     if not (isinstance(re_ratio, (int, float)) and 1.0 < re_ratio <= 6.0):
         raise ValueError(f"re_ratio: {re_ratio!r} is not allowed; r_e/Δx must lie in (1, 6]")
     if not (isinstance(stabilisation, (int, float)) and 0.0 <= stabilisation <= 10.0):
         raise ValueError(f"stabilisation: {stabilisation!r} is not allowed; must lie in [0, 10]")
     X = np.ascontiguousarray(X, dtype=np.float64)
+    N, d = X.shape
+    if d not in (2, 3):
+        raise ValueError(f"X: {d}-D positions are not allowed; 2-D (plane strain) or 3-D")
     V = np.ascontiguousarray(V, dtype=np.float64)
+    table = MaterialTable.of(material)
+    mat_id = (np.zeros(N, np.int64) if mat_id is None
+              else np.ascontiguousarray(mat_id, dtype=np.int64))
+    if mat_id.shape != (N,) or (N and not (0 <= mat_id.min() and mat_id.max() < len(table))):
+        raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
+                         "(rows of the material table)")
     re = re_ratio * dx
     indptr, indices = neighbour_list(X, re)
     if body is not None:
         indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
     nnz = len(indices)
-    X_ij = np.empty((nnz, 2))
+    X_ij = np.empty((nnz, d))
     w = np.empty(nnz)
-    Ainv = np.empty((X.shape[0], 2, 2))
-    wr2 = np.empty(X.shape[0])
+    Ainv = np.empty((N, d, d))
+    wr2 = np.empty(N)
     bad = reference_geometry(X, indptr, indices, re, X_ij, w, Ainv, wr2)
-    cs = np.zeros(X.shape[0])
+    cs = np.zeros(N)
     if stabilisation > 0:
-        cs = stabilisation * material.mu * V / np.maximum(wr2, 1e-300)
-    return Model(X, V, material.rho * V, dx, re, indptr, indices, X_ij, w, Ainv, cs,
-                 material.params(), material, int(bad))
+        mu = np.array([mt.mu for mt in table.materials])[mat_id]
+        cs = stabilisation * mu * V / np.maximum(wr2, 1e-300)
+    return Model(X, V, table.rho(mat_id) * V, dx, re, indptr, indices, X_ij, w, Ainv, cs,
+                 table.params(), table, mat_id, table.all_svk, int(bad))
 
 
 @dataclass
 class State:
-    """Synchronous state: positions x (N,2), velocities v (N,2), accelerations acc (N,2), time t;
-    the last F (N,3,3), M (N,2,2), material status (N,) and history."""
+    """Synchronous state: positions x (N, d), velocities v (N, d), accelerations acc (N, d), time t;
+    the last F (N, 3, 3), M (N, d, d), material status (N,) and history (N, n_history)."""
 
     x: np.ndarray
     v: np.ndarray
@@ -336,36 +557,40 @@ class State:
     steps: int = 0
 
 
-def forces(model: Model, x: np.ndarray, state: State | None = None) -> np.ndarray:
-    """Internal forces (N,2) at positions x (eq. 7 plus the optional stabilisation)."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    N = model.n
+def _evaluate(model: Model, x: np.ndarray, h: np.ndarray):
+    """stress_pass at x from the history h: (F, M, h_new, status)."""
+    N, d = model.n, model.dim
     F = np.empty((N, 3, 3))
-    M = np.empty((N, 2, 2))
+    M = np.empty((N, d, d))
     status = np.zeros(N, np.int64)
-    nh = model.material.n_history
-    h = np.zeros((N, nh)) if state is None else state.h
-    h_new = np.zeros((N, nh))
-    stress_pass(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V, h,
-                model.prm, F, M, h_new, status)
+    h_new = h.copy()
+    sp = _stress_pass_2d if d == 2 else stress_pass
+    sp(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V, h, model.prm,
+       model.mat_id, model.all_svk, F, M, h_new, status)
+    return F, M, h_new, status
+
+
+def forces(model: Model, x: np.ndarray, state: State | None = None) -> np.ndarray:
+    """Internal forces (N, d) at positions x (eq. 7 plus the optional stabilisation), from the
+    committed history of ``state`` (virgin without one); fills the state's F, M, status and
+    trial history h_new."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    h = model.table.initial_history(model.mat_id) if state is None else state.h
+    F, M, h_new, status = _evaluate(model, x, h)
     if state is not None:
         state.F[:] = F
         state.M[:] = M
         state.status[:] = status
+        state.h_new[:] = h_new
     return internal_force(x, model.indptr, model.indices, model.X_ij, model.w, M, F, model.cs)
 
 
 def potential_energy(model: Model, x: np.ndarray) -> float:
-    """The potential part of the discrete Hamiltonian, Σ V_i ψ(F_i) + H_s, J per unit thickness."""
+    """The potential part of the discrete Hamiltonian, Σ V_i ψ(F_i) + H_s, J (J per unit thickness
+    in 2-D); hyperelastic materials (:func:`sph.diagnostics.strain_energy`)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
-    N = model.n
-    F = np.empty((N, 3, 3))
-    M = np.empty((N, 2, 2))
-    status = np.zeros(N, np.int64)
-    nh = model.material.n_history
-    stress_pass(x, model.indptr, model.indices, model.X_ij, model.w, model.Ainv, model.V,
-                np.zeros((N, nh)), model.prm, F, M, np.zeros((N, nh)), status)
-    e = strain_energy(F, model.V, model.prm)
+    F, _, _, _ = _evaluate(model, x, model.table.initial_history(model.mat_id))
+    e = strain_energy(F, model.V, model.prm, model.mat_id)
     if model.cs.any():
         e += stabilisation_energy(x, model.indptr, model.indices, model.X_ij, model.w, F, model.cs)
     return float(e)
@@ -373,45 +598,46 @@ def potential_energy(model: Model, x: np.ndarray) -> float:
 
 def init(model: Model, v0: np.ndarray | None = None, x0: np.ndarray | None = None) -> State:
     """State at t = 0 with the accelerations of the initial configuration."""
-    N = model.n
+    N, d = model.n, model.dim
     x = np.array(model.X if x0 is None else x0, dtype=np.float64)
-    v = np.zeros((N, 2)) if v0 is None else np.array(v0, dtype=np.float64)
-    nh = model.material.n_history
-    st = State(x, v, np.zeros((N, 2)), 0.0, np.empty((N, 3, 3)), np.empty((N, 2, 2)),
-               np.zeros(N, np.int64), model.material.initial_history(N), np.zeros((N, nh)))
+    v = np.zeros((N, d)) if v0 is None else np.array(v0, dtype=np.float64)
+    h = model.table.initial_history(model.mat_id)
+    st = State(x, v, np.zeros((N, d)), 0.0, np.empty((N, 3, 3)), np.empty((N, d, d)),
+               np.zeros(N, np.int64), h, h.copy())
     st.acc[:] = forces(model, x, st) / model.m[:, None]
     return st
 
 
 def advance(model: Model, st: State, dt: float, n_steps: int, fixed=None, v_fix=None,
             a_ext=None, damping: float = 0.0, scheme: str = "verlet") -> int:
-    """Advance ``st`` by ``n_steps`` steps of size dt (s). ``fixed`` (N,2) uint8 dofs follow
-    ``v_fix``; ``a_ext`` (N,2) m/s² external acceleration. Returns the steps completed."""
+    """Advance ``st`` by ``n_steps`` steps of size dt (s). ``fixed`` (N, d) uint8 DOFs follow
+    ``v_fix`` (m/s); ``a_ext`` (N, d) m/s² external acceleration; ``damping`` mass-proportional,
+    1/s. Returns the steps completed."""
     if scheme not in ("verlet", "euler"):
         raise ValueError(f"scheme: {scheme!r} is not one of 'verlet', 'euler'")
-    N = model.n
-    fixed = np.zeros((N, 2), np.uint8) if fixed is None else fixed
-    v_fix = np.zeros((N, 2)) if v_fix is None else v_fix
-    a_ext = np.zeros((N, 2)) if a_ext is None else a_ext
+    N, d = model.n, model.dim
+    fixed = np.zeros((N, d), np.uint8) if fixed is None else fixed
+    v_fix = np.zeros((N, d)) if v_fix is None else v_fix
+    a_ext = np.zeros((N, d)) if a_ext is None else a_ext
     done = _advance(n_steps, scheme == "euler", st.x, st.v, st.acc, model.m, a_ext, fixed, v_fix,
                     dt, damping, model.indptr, model.indices, model.X_ij, model.w, model.Ainv,
-                    model.V, st.h, model.prm, model.cs, st.F, st.M, st.h_new, st.status)
-    if model.material.n_history:
-        st.h[:] = st.h_new
+                    model.V, st.h, model.prm, model.mat_id, model.all_svk, model.cs, st.F, st.M,
+                    st.h_new, st.status)
     st.t += done * dt
     st.steps += done
     return done
 
 
 def energies(model: Model, st: State) -> tuple[float, float]:
-    """(kinetic, potential) energy of the state, J per unit thickness."""
+    """(kinetic, potential) energy of the state, J (J per unit thickness in 2-D)."""
     ke = 0.5 * float(np.sum(model.m[:, None] * st.v * st.v))
     return ke, potential_energy(model, st.x)
 
 
 def time_step(model: Model, dt_factor: float) -> float:
-    """dt = dt_factor · Δx / c_p (shared CFL estimate; c_p the P-wave speed, plane strain)."""
-    return cfl_time_step(model.dx, model.material.wave_speed("strain"), dt_factor)
+    """dt = dt_factor · Δx / c_p (shared CFL estimate; c_p the fastest P-wave speed of the
+    table)."""
+    return cfl_time_step(model.dx, model.table.wave_speed("strain"), dt_factor)
 
 
 # ================================================================================================
@@ -419,19 +645,20 @@ def time_step(model: Model, dt_factor: float) -> float:
 # ================================================================================================
 
 def wls_discretisation(model: Model):
-    """The HPM body as a :class:`sph.total_lagrangian.Discretisation`: eq. 4 is
+    """The HPM body as a :class:`sph.total_lagrangian.Discretisation` (2-D or 3-D): eq. 4 is
     F_i = Σ_j (x_j − x_i) ⊗ G_ij with G_ij = w_ij A_i⁻¹ X_ij (A_i symmetric), and the force of
     eq. 7 is −∂(Σ V ψ)/∂x — the gradient form of CSPH's eq. 35, so the static Newton and the modal
     solve (tangent K = ∂²Π/∂x∂x) apply unchanged. Without the stabilisation potential only."""
     from .correction import reverse_gradients
     from .total_lagrangian import Discretisation
 
-    rows = np.repeat(np.arange(model.n), np.diff(model.indptr))
-    G = model.w[:, None] * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij)
+    N, d = model.n, model.dim
+    rows = np.repeat(np.arange(N), np.diff(model.indptr))
+    G = np.ascontiguousarray(model.w[:, None]
+                             * np.einsum("pkl,pl->pk", model.Ainv[rows], model.X_ij))
     GT = reverse_gradients(model.indptr, model.indices, G)
-    N = model.n
     return Discretisation(model.X, model.V, model.m, model.re, "wls", model.indptr,
-                          model.indices, G, GT, np.broadcast_to(np.eye(2), (N, 2, 2)).copy(),
+                          model.indices, G, GT, np.broadcast_to(np.eye(d), (N, d, d)).copy(),
                           np.ones(N, bool))
 
 
@@ -442,7 +669,8 @@ OPTIONS = dict(re_ratio=f"r_e/Δx (default {RE_RATIO})",
 
 
 class HPM(ParticleBody):
-    """An HPM body built from :class:`sph.particles.Particles` (2-D, one material)."""
+    """An HPM body built from :class:`sph.particles.Particles`: 2-D plane strain or 3-D, a row of
+    the particles' material table per particle."""
 
     name = NAME
 
@@ -450,30 +678,25 @@ class HPM(ParticleBody):
                  scheme: str = "verlet"):
         super().__init__(particles)
         ps = particles
-        if ps.dim != 2 or ps.plane == "stress":
-            raise ValueError("hpm: plane strain (2-D) only in this version; the model is "
-                             f"{ps.dim}-D{' plane stress' if ps.plane == 'stress' else ''}")
-        if len(ps.table) != 1:
-            raise ValueError("hpm: one material per body in this version (the model has "
-                             f"{len(ps.table)})")
+        if ps.plane == "stress":
+            raise ValueError("plane: 'stress' is not modelled by hpm (F33 = 1: plane strain); "
+                             "allowed: 'strain' or a 3-D model")
         if scheme not in ("verlet", "euler"):
             raise ValueError(f"scheme: {scheme!r} is not one of 'verlet', 'euler'")
         self.scheme = scheme
         self.stabilisation = float(stabilisation)
-        self.model = build_model(ps.X, ps.V, ps.table[0], ps.dx, re_ratio, stabilisation,
-                           body=ps.body if len(ps.body_names) > 1 else None)
+        self.model = build_model(ps.X, ps.V, ps.table, ps.dx, re_ratio, stabilisation,
+                                 body=ps.body if len(ps.body_names) > 1 else None,
+                                 mat_id=ps.mat_id)
         self.m = self.model.m
         self.st = init(self.model)
         self.x, self.v, self.acc = self.st.x, self.st.v, self.st.acc
-
-    def start(self, v0, f_ext, extra=None) -> None:
-        super().start(v0, f_ext, extra)
 
     def internal_force(self, x):
         return forces(self.model, x, self.st)
 
     def commit(self) -> None:
-        if self.model.material.n_history:
+        if self.model.n_history:
             self.st.h[:] = self.st.h_new
 
     def failed(self) -> bool:

@@ -66,3 +66,13 @@ def test_invalid_inputs_name_the_parameter():
     ps = block((0.01, 0.01), 4)
     with pytest.raises(ValueError, match="stress"):
         classic.Body(ps.X, ps.V, RUBBER, ps.dx, stress="plastic")
+
+
+def test_plane_stress_is_refused_naming_the_parameter():
+    """Classic SPH's 2-D rates have L_zz = 0 (plane strain); a plane-stress model is refused,
+    3-D is built."""
+    ps = block((0.01, 0.005), 4)
+    with pytest.raises(ValueError, match="plane"):
+        classic.build(particles.of_arrays(ps.X, ps.V, ps.dx, RUBBER, plane="stress"))
+    X, V = particles.box((0, 0, 0), (0.01, 0.005, 0.005), 0.0025, "cell")
+    assert classic.build(particles.of_arrays(X, V, 0.0025, RUBBER, plane=None)).dim == 3

@@ -206,3 +206,12 @@ def test_static_newton_agrees_with_dynamic_relaxation():
     assert np.allclose(newton["tip_deflection"], dr["tip_deflection"], rtol=1e-3)
     with pytest.raises(ValueError, match="static"):
         driver.solve("hpm", sc, 3, stabilisation=1.0)
+
+
+def test_plane_stress_is_refused_naming_the_parameter():
+    """HPM's 2-D F has F33 = 1 (plane strain); a plane-stress model is refused, 3-D is built."""
+    ps = block((0.01, 0.005), 4, mode="node")
+    with pytest.raises(ValueError, match="plane"):
+        hpm.build(particles.of_arrays(ps.X, ps.V, ps.dx, RUBBER, plane="stress"))
+    X, V = particles.box((0, 0, 0), (0.01, 0.005, 0.005), 0.0025, "node")
+    assert hpm.build(particles.of_arrays(X, V, 0.0025, RUBBER, plane=None)).dim == 3
