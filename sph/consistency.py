@@ -91,6 +91,7 @@ from numba import njit, prange
 from scipy.sparse.csgraph import connected_components
 
 from .kernels import JIT, KERNELS, w as kernel_value
+from .neighbours import reverse_pairs
 
 BASES = ("linear", "quadratic")
 WEIGHTS = ("uniform", "kernel", "wls")
@@ -456,26 +457,6 @@ def _row_fix(indptr, indices, G, Pb, C, ell, ok, dG0, rres):
 
 
 @njit(**JIT)
-def _reverse_pairs(indptr, indices):
-    """rev[p] for the pair p = (a, b): the index of (b, a) in b's sorted row."""
-    N = indptr.shape[0] - 1
-    rev = np.empty(indices.shape[0], np.int64)
-    for a in range(N):
-        for p in range(indptr[a], indptr[a + 1]):
-            b = indices[p]
-            lo = indptr[b]
-            hi = indptr[b + 1]
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if indices[mid] < a:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            rev[p] = lo
-    return rev
-
-
-@njit(**JIT)
 def _two_ring(indptr, indices, count_only, kptr, kind):
     """Sparsity of K: row c holds ∪_{a ∈ S(c)} S(a), S(a) = {a} ∪ nbrs(a) (sorted)."""
     N = indptr.shape[0] - 1
@@ -680,7 +661,7 @@ def consistent_gradients(X, V, indptr, indices, G, normals, free, basis: str = "
     _row_geometry(X, indptr, indices, omega, quadratic, Pb, C, sig, kap, ok, ell)
     t_rows = time.perf_counter()
 
-    rev = _reverse_pairs(indptr, indices)
+    rev = reverse_pairs(indptr, indices)
     dummy_p = np.zeros(1, np.int64)
     counts = _two_ring(indptr, indices, True, dummy_p, dummy_p)
     kptr = np.zeros(N + 1, np.int64)

@@ -156,23 +156,9 @@ def quadratic_gradients(X, V, indptr, indices, h, kind):
     return G, ok
 
 
-@njit(parallel=True, **JIT)
 def reverse_gradients(indptr, indices, G):
-    """G_ba for every pair (a, b) of a's row, found once by binary search in b's sorted row;
-    stored contiguously beside G_ab (shape (nnz, d))."""
-    N = indptr.shape[0] - 1
-    GT = np.empty_like(G)
-    for a in prange(N):
-        for p in range(indptr[a], indptr[a + 1]):
-            b = indices[p]
-            lo = indptr[b]
-            hi = indptr[b + 1]
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if indices[mid] < a:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            for k in range(G.shape[1]):
-                GT[p, k] = G[lo, k]
-    return GT
+    """G_ba for every pair (a, b) of a's row (:func:`sph.neighbours.reverse_pairs`), stored
+    contiguously beside G_ab (shape (nnz, d)) for the force loop."""
+    from .neighbours import reverse_pairs
+
+    return np.ascontiguousarray(G[reverse_pairs(indptr, indices)])

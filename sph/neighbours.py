@@ -156,3 +156,24 @@ def drop_cross_body(indptr: np.ndarray, indices: np.ndarray, body: np.ndarray):
     new_ptr = np.zeros_like(indptr)
     np.cumsum(np.bincount(rows[keep], minlength=N), out=new_ptr[1:])
     return new_ptr, np.ascontiguousarray(indices[keep])
+
+
+@njit(parallel=True, **JIT)
+def reverse_pairs(indptr, indices):
+    """rev[p] for the pair p = (a, b) of a's row: the index of (b, a) in b's sorted row (binary
+    search; the list is symmetric), shape (nnz,)."""
+    N = indptr.shape[0] - 1
+    rev = np.empty(indices.shape[0], np.int64)
+    for a in prange(N):
+        for p in range(indptr[a], indptr[a + 1]):
+            b = indices[p]
+            lo = indptr[b]
+            hi = indptr[b + 1]
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if indices[mid] < a:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            rev[p] = lo
+    return rev

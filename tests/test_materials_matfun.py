@@ -36,7 +36,7 @@ def decompose(S):
     return np.diag(a).copy(), V
 
 
-def check(S):
+def check_eigen(S):
     """All the properties against eigh for one matrix S; returns the observed errors / eps."""
     x, V = decompose(S)
     scale = np.max(np.abs(S))
@@ -93,7 +93,7 @@ def battery(seed, n):
 
 def test_closed_form_eigen_against_lapack_on_a_random_battery():
     for S in battery(1, 3500):
-        check(S)
+        check_eigen(S)
 
 
 @pytest.mark.parametrize("S", [
@@ -111,7 +111,7 @@ def test_closed_form_eigen_against_lapack_on_a_random_battery():
     np.array([[0.0, 4e-35, 0.0], [4e-35, 4.0, 1.2e-120], [0.0, 1.2e-120, 0.0]]),
 ])
 def test_closed_form_eigen_hard_cases(S):
-    check(S)
+    check_eigen(S)
 
 
 def test_diagonal_input_gives_identity_vectors():
@@ -126,7 +126,7 @@ def test_diagonal_input_gives_identity_vectors():
 def test_closed_form_eigen_property(entries):
     a00, a01, a02, a11, a12, a22 = entries
     S = np.array([[a00, a01, a02], [a01, a11, a12], [a02, a12, a22]])
-    check(S)
+    check_eigen(S)
 
 
 # --- the J2 point at a nearly repeated trial eigenvalue --------------------------------------

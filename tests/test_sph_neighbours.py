@@ -31,3 +31,15 @@ def test_lattice_with_ties_and_symmetry(dim):
 def test_bad_input():
     with pytest.raises(ValueError, match="radius"):
         neighbour_list(np.zeros((3, 2)), 0.0)
+
+
+def test_reverse_pairs_point_at_the_mirrored_pair():
+    """rev maps the pair (a, b) of a's row to (b, a) in b's row: the brute-force pair list says
+    which index that is."""
+    from sph.neighbours import reverse_pairs
+
+    X = np.random.default_rng(4).random((300, 3))
+    ip, ix = neighbour_list(X, 0.2)
+    rev = reverse_pairs(ip, ix)
+    a = np.repeat(np.arange(len(X)), np.diff(ip))
+    assert np.array_equal(ix[rev], a) and np.array_equal(a[rev], ix)
