@@ -217,8 +217,9 @@ def startup_time(solver: str, n_particles: int, timeout: float | None = None) ->
     """Seconds from launching a fresh interpreter to the end of the plate's first step with
     numba's cache warm: launched twice, the first run fills the cache, the second counts."""
     t = _timeout(n_particles) if timeout is None else timeout
+    cold = max(t, STARTUP_COLD_TIMEOUT) if timeout is None else timeout  # an explicit limit holds for both
     res = {}
-    for attempt, limit in (("cold", max(t, STARTUP_COLD_TIMEOUT)), ("warm", t)):
+    for attempt, limit in (("cold", cold), ("warm", t)):
         t0 = time.time()
         out, status = _subprocess(["--startup", solver, str(n_particles)], limit)
         if out is None:
