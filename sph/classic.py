@@ -517,7 +517,8 @@ class Body:
         if self.hyper:
             from .diagnostics import strain_energy
 
-            return ke, strain_energy(np.ascontiguousarray(self.F), self.V0, self.prm, self.mat_id)
+            return ke, strain_energy(np.ascontiguousarray(self.F), self.V0, self.prm, self.mat_id,
+                                   history=self.hist)
         s = self.sigma
         tr = s[:, 0, 0] + s[:, 1, 1] + s[:, 2, 2]
         ss = np.einsum("nij,nij->n", s, s)

@@ -51,6 +51,32 @@ def contact_forces(x: np.ndarray, body: np.ndarray, rc: float, k: float):
     if not rc > 0 or not k >= 0:
         raise ValueError(f"rc, k: must be > 0 and >= 0 (got {rc}, {k})")
     x = np.ascontiguousarray(x, dtype=np.float64)
-    indptr, indices = neighbour_list(x, rc)
+    body = np.ascontiguousarray(body, dtype=np.int64)
     kk = k if x.shape[1] == 2 else k * rc
-    return _contact(x, np.ascontiguousarray(body, dtype=np.int64), indptr, indices, rc, kk)
+    sel = candidates(x, body, rc)
+    if sel is None:
+        indptr, indices = neighbour_list(x, rc)
+        return _contact(x, body, indptr, indices, rc, kk)
+    f = np.zeros_like(x)
+    if sel.size == 0:
+        return f, 0.0
+    xs = np.ascontiguousarray(x[sel])
+    indptr, indices = neighbour_list(xs, rc)
+    fs, e = _contact(xs, np.ascontiguousarray(body[sel]), indptr, indices, rc, kk)
+    f[sel] = fs
+    return f, e
+
+
+def candidates(x: np.ndarray, body: np.ndarray, rc: float):
+    """Indices of the particles that can touch another body: those within ``rc`` of another
+    body's bounding box (the pair search then runs on them only; a large body touched on a small
+    part of its surface costs that part). None when that is every particle."""
+    labels = np.unique(body)
+    near = np.zeros(len(x), bool)
+    for b in labels:
+        mb = body == b
+        lo, hi = x[mb].min(axis=0) - rc, x[mb].max(axis=0) + rc
+        near |= ~mb & np.all((x >= lo) & (x <= hi), axis=1)
+    if near.all():
+        return None
+    return np.nonzero(near)[0]

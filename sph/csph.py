@@ -219,7 +219,7 @@ class CSPH(ParticleBody):
 
         b = self.tl
         F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
-        e = strain_energy(F, self.disc.V, b.prm, b.mat_id)
+        e = strain_energy(F, self.disc.V, b.prm, b.mat_id, history=b.history)
         if b.K_hg is not None:
             e += 0.5 * float(np.sum(self.x * (b.K_hg @ self.x)))
         return e

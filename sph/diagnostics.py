@@ -53,15 +53,29 @@ def _strain_energy(F, V, prm, mat_id, gs, gw, nthreads_chunks):
 
 
 def strain_energy(F: np.ndarray, V: np.ndarray, prm: np.ndarray, mat_id=None,
-                  per_particle: bool = False):
-    """Stored energy Σ V_a ψ(F_a), J (J/m in 2-D), of hyperelastic materials.
+                  per_particle: bool = False, history=None):
+    """Stored energy Σ V_a ψ(F_a), J (J/m in 2-D), of hyperelastic materials, or with
+    ``history`` (N, n_history) of any law, Σ V_a ψ(F_a, h_a) in closed form
+    (:func:`workbench.materials.kernels.stored_energies`; a law with a history — J2, mortar —
+    needs it: ValueError without).
 
     F: (N, 3, 3) deformation gradients; V: (N,) reference volumes; prm: a parameter row
     (``Material.params()``) or a table (n_mat, N_PARAMS) with ``mat_id`` (N,) its rows.
     """
+    from workbench.materials import LAW_CODES
+
     prm = np.atleast_2d(prm)
     mat_id = (np.zeros(len(V), np.int64) if mat_id is None
               else np.ascontiguousarray(mat_id, dtype=np.int64))
+    if history is not None and np.shape(history)[1] > 0:
+        from workbench.materials.kernels import stored_energies
+
+        e = np.asarray(V, dtype=np.float64) * stored_energies(
+            np.ascontiguousarray(F), np.ascontiguousarray(history, dtype=np.float64), prm, mat_id)
+        return e if per_particle else float(e.sum())
+    with_history = (LAW_CODES["j2"], LAW_CODES["mortar"])
+    if np.isin(prm[np.unique(mat_id), 0].astype(int), with_history).any():
+        raise ValueError("history: a law with a history (j2, mortar) needs it; give history=(N, n_history)")
     e = _strain_energy(np.ascontiguousarray(F), np.ascontiguousarray(V, dtype=np.float64), prm,
                        mat_id, GAUSS_S, GAUSS_W, N_CHUNKS)
     return e if per_particle else float(e.sum())

@@ -197,12 +197,17 @@ class Run:
         return v
 
     # -- observables ---------------------------------------------------------------------------
-    def observe(self, x, force=None, state=None) -> dict:
+    def observe(self, x, force=None, state=None, contact=None) -> dict:
         """The model's observables at positions x; ``force`` the total force f_int + f_ext (N, d)
-        for reactions; ``state`` a field state for stresses and damage."""
+        for reactions; ``state`` a field state for stresses and damage; ``contact`` the contact
+        forces (N, d) for :class:`~workbench.scenes.model.ContactForce` (NaN without)."""
         ps = self.ps
         out = {}
         for o in self.model.observables:
+            if isinstance(o, M.ContactForce):
+                sel = ps.body == ps.body_names.index(o.body)
+                out[o.name] = math.nan if contact is None else float(contact[sel, o.axis].sum())
+                continue
             if isinstance(o, M.Displacement):
                 if o.set in ps.probes:
                     idx, w = ps.probes[o.set]
@@ -342,19 +347,16 @@ class Run:
         diag = {}
         w_ext = 0.0
 
-        def energy_total():
-            ke, se = body.energies()
-            ce = 0.0
+        def record():
+            fc, ce = None, 0.0
             if contact is not None:
                 from .contact import contact_forces
 
-                ce = contact_forces(body.x, ps.body, *contact)[1]
-            return ke, se + ce
-
-        def record():
-            for n, v in self.observe(body.x, None, None).items():
+                fc, ce = contact_forces(body.x, ps.body, *contact)
+            for n, v in self.observe(body.x, None, None, fc).items():
                 rec[n].append(v)
-            ke, se = energy_total()
+            ke, se = body.energies()
+            se += ce
             times.append(body.t)
             # the method's diagnostics (a sparse product or two) on ≤ ~50 records, carried forward
             # between them: at every record they cost 5 % of the plate's time loop
@@ -460,4 +462,8 @@ class Run:
         if not self.model.contact:
             return None
         c = self.model.contact[0]
+        for o in self.model.contact[1:]:
+            if (o.stiffness, o.distance) != (c.stiffness, c.distance):
+                raise SceneError(f"contact {o.bodies}: stiffness and distance must equal those of "
+                                 f"contact {c.bodies} (one penalty acts between all bodies)")
         return (c.distance if c.distance is not None else self.ps.dx, c.stiffness)

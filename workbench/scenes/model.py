@@ -334,7 +334,18 @@ class Period:
     of: str
 
 
-OBSERVABLES = (Displacement, Position, Reaction, MeanStress, FailedFraction, Period)
+@dataclass(frozen=True)
+class ContactForce:
+    """Total contact force (N; N/m in 2-D) on the particles of ``body`` along ``axis``, from
+    every :class:`Contact` (explicit drives; an impact force, or the reaction of a held support
+    body)."""
+
+    name: str
+    body: str
+    axis: int
+
+
+OBSERVABLES = (Displacement, Position, Reaction, MeanStress, FailedFraction, Period, ContactForce)
 CONSTRAINTS = (Clamp, Roller, Prescribed)
 LOADS = (Traction, Pressure, PointLoad, BodyForce, InitialVelocity)
 DRIVES = (Static, Modal, Explicit)
@@ -482,6 +493,9 @@ class Model:
             for rn in getattr(o, "regions", None) or ():
                 if rn not in region_names:
                     raise SceneError(f"observable '{o.name}': region '{rn}' does not exist")
+            if isinstance(o, ContactForce) and o.body not in self.bodies:
+                raise SceneError(f"observable '{o.name}': body '{o.body}' does not exist "
+                                 f"(bodies: {', '.join(self.bodies)})")
             if isinstance(o, Period):
                 if o.of not in obs_names or not isinstance(self.observable(o.of), Displacement):
                     raise SceneError(f"observable '{o.name}': '{o.of}' is not a Displacement "
