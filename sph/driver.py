@@ -20,10 +20,25 @@
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
    :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
 
+Reactions and energies of an explicit run. The force a constraint exerts on a DOF it moves at the
+velocity v_fix is r = m dv_fix/dt − f (f internal plus dead force); its impulse over a chunk is
+m Δv_fix − ∫ f dt, with ∫ f dt the trapezoid sum the method's time loop adds up
+(:attr:`sph.method.ParticleBody.impulse`), and a :class:`~workbench.scenes.model.Reaction` is the
+time mean of Σ r over the interval since the previous record. The external work is that of the dead
+loads, Σ f_ext · Δx, plus that of the constraints, Σ ½ m Δ(v_fix²) at each change of v_fix and
+−v_fix · ∫ f dt over each chunk — velocity Verlet's own discrete work on those DOFs, so that
+``external_work`` = ``kinetic_energy`` + ``strain_energy`` + the energies the body reports as
+dissipated (:meth:`sph.method.ParticleBody.dissipated`: plastic work, energy released by failure)
+holds to the time integration's error.
+
 Returns a dict: ``status`` (or one per load value), ``parameter`` / ``time``, every observable by
-name (an array over the load values or records), energies, ``wall_time`` (the run's cost, set-up
-included; static: cumulative at each load value), ``loop_time`` (explicit: the time loop alone),
-``setup_time``, ``n_particles``, ``dt``, ``steps``, and the scene's quantities.
+name (an array over the load values or records), energies (explicit, J — J/m in 2-D — at each
+record: ``kinetic_energy``, ``strain_energy``, ``external_work``, and ``plastic_work``,
+``released_energy`` where the body reports them; ``energy_history`` their balance), ``wall_time``
+(the run's cost, set-up included; static: cumulative at each load value), ``loop_time`` (explicit:
+the time loop alone), ``setup_time``, ``n_particles``, ``dt``, ``steps``, the final state
+(explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``failed_particles``
+(N,) bool where the model observes failure), and the scene's quantities.
 """
 from __future__ import annotations
 
@@ -238,14 +253,18 @@ class Run:
         w = self.ps.V[sel] * J[sel]
         return float(np.sum(w * sig[sel, o.i, o.j]) / np.sum(w))
 
-    def _failed_fraction(self, o, state) -> float:
+    def _failed_mask(self, state) -> np.ndarray:
+        """(N,) bool: the J2 particles whose damage has reached 1 (none without a history)."""
         from workbench.materials import HIST_DAMAGE
 
-        sel = self.ps.in_regions(o.regions)
         if state is None or state.get("history") is None or state["history"].shape[1] <= HIST_DAMAGE:
-            return 0.0
+            return np.zeros(self.ps.n, bool)
         j2 = np.array([m.law == "j2" for m in self.ps.table.materials])[self.ps.mat_id]
-        failed = j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+        return j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+
+    def _failed_fraction(self, o, state) -> float:
+        sel = self.ps.in_regions(o.regions)
+        failed = self._failed_mask(state)
         return float(np.count_nonzero(failed[sel]) / max(1, np.count_nonzero(sel)))
 
     # -- static --------------------------------------------------------------------------------
@@ -338,9 +357,19 @@ class Run:
                               field_frames)
         names = [o.name for o in self.model.observables if not isinstance(o, M.Period)]
         rec = {n: [] for n in names}
-        times, kes, ses, bal, dh, mom = [], [], [], [], [], []
-        diag = {}
-        w_ext = 0.0
+        times, kes, ses, bal, dh, mom, wes = [], [], [], [], [], [], []
+        diag, dis_e = {}, {}
+        w_ext = 0.0  # work of the dead loads and of the constraints (prescribed motion)
+        from .method import ParticleBody
+
+        tracked = (extra is not None or type(body).advance is ParticleBody.advance
+                   or body.impulse_in_loop)
+        fx = self.fixed
+        m_dof = np.broadcast_to(body.m[:, None], fx.shape)
+        r_imp = np.zeros_like(ps.X)  # impulse of the constraint forces since the last record
+        r_time = [0.0]
+        need_state = any(isinstance(o, (M.MeanStress, M.FailedFraction))
+                         for o in self.model.observables)
 
         def energy_total():
             ke, se = body.energies()
@@ -352,15 +381,25 @@ class Run:
             return ke, se + ce
 
         def record():
-            for n, v in self.observe(body.x, None, None).items():
+            # the force on each particle whose negative the constraints exert: the mean over the
+            # interval since the last record (the state's own force at t = 0)
+            force = (-r_imp / r_time[0] if r_time[0] > 0 else body.acc * body.m[:, None])
+            state = body.field_state() if need_state else None
+            for n, v in self.observe(body.x, force, state).items():
                 rec[n].append(v)
+            r_imp[:] = 0.0
+            r_time[0] = 0.0
             ke, se = energy_total()
             times.append(body.t)
             for n, v in body.diagnostics().items():
                 diag.setdefault(n, []).append(v)
+            lost = body.dissipated()
+            for n, v in lost.items():
+                dis_e.setdefault(n, []).append(v)
             kes.append(ke)
             ses.append(se)
-            bal.append(ke + se - w_ext)
+            wes.append(w_ext)
+            bal.append(ke + se + sum(lost.values()) - w_ext)
             mom.append(linear_momentum(body.m, body.v))
 
         record()
@@ -385,10 +424,23 @@ class Run:
             else:
                 f_new = f_ext
             x_before = body.x.copy()
+            # a change of the prescribed velocity: the constraint's impulse m Δv and work Δ(½ m v²)
+            dv = np.where(fx, v_fix - body.v, 0.0)
+            r_imp += m_dof * dv
+            w_ext += 0.5 * float(np.sum(m_dof * dv * (v_fix + body.v)))
+            f_before = body.acc * body.m[:, None]
+            body.impulse[:] = 0.0
             tl0 = time.perf_counter()
             done = body.advance(k, dt, f_new, fixed, v_fix, drive.damping, extra)
             t_loop += time.perf_counter() - tl0
             w_ext += float(np.sum(f_new * (body.x - x_before)))
+            # the constraints: r = −f on a DOF moving at v_fix, work −v_fix · ∫ f dt
+            imp = (body.impulse if tracked else
+                   0.5 * done * dt * (f_before + body.acc * body.m[:, None]))
+            imp = np.where(fx, imp, 0.0)
+            w_ext -= float(np.sum(v_fix * imp))
+            r_imp -= imp
+            r_time[0] += done * dt
             f_ext = f_new
             if done < k or not np.isfinite(body.x).all():
                 criterion = "non-finite"
@@ -420,13 +472,20 @@ class Run:
                    wall_time=time.perf_counter() - t0, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
                    kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
-                   energy_history=np.asarray(bal), external_work=w_ext,
+                   energy_history=np.asarray(bal), external_work=np.asarray(wes),
                    linear_momentum=np.asarray(mom),
                    particle_steps_per_second=ps.n * body.steps / t_loop if t_loop > 0 else math.nan)
         for n in names:
             out[n] = np.asarray(rec[n])
         for n, v in diag.items():
             out[n] = np.asarray(v)
+        for n, v in dis_e.items():
+            out[n] = np.asarray(v)
+        # the final state: reference and current positions, regions, and the failed particles
+        out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
+                   region_names=list(ps.region_names))
+        if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
+            out["failed_particles"] = self._failed_mask(body.field_state())
         e = np.asarray(bal)
         drift = float((e[-1] - e[0]) / e_scale) if e_scale > 0 else math.nan
         if drive.energy_growth is None:
