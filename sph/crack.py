@@ -30,7 +30,8 @@ what a still sees hardly spans a direction (a sliver between a crack and a free 
 would multiply the gradients — the stiffness — without bound and the explicit step would go
 unstable: when the smallest singular value of F⁻¹ N is below :data:`MIN_SINGULAR` the particle is
 *detached* instead (its row emptied, its integration volume zero: a fragment that keeps its mass
-and moves on freely). The integration-consistent correction of the body is left as it is near a
+and moves on freely), and from then on it blocks the view of the others as a failed particle does
+(else, seen from both faces, it would pass forces across the crack). The integration-consistent correction of the body is left as it is near a
 crack.
 
 Under the 'literal' failure mode a failed particle keeps no stress at all; the body gives it zero
@@ -51,6 +52,9 @@ SHADE = 1.0 - 1e-6
 """Width of the opaque cell of a failed particle over Δx: its interior (a segment that only grazes a
 cell's face or corner, as between two particles of a straight lattice row beside a failed one, is
 not cut)."""
+MAX_CASCADE = 50
+"""Most rounds of detachment per update (a detached particle blocks its neighbours' view as a
+failed one does, which may detach another)."""
 MIN_SINGULAR = 0.4
 """Smallest singular value of F⁻¹ N (= M_a, Σ_kept (X_b − X_a) ⊗ G_ab, for an affine state; I for
 a full row, about 0.5 in the normal direction for a particle on the face of a crack, as for one on
@@ -91,7 +95,7 @@ def _segment_hits_cell(xa, xb, c, half):
 def visible_rows(x, X, dx, indptr, indices, G, alive, blocked, skip, s_min, shade):
     """One update of the visibility criterion (module docstring), in place: G (nnz, d) the current
     gradients, ``alive`` (nnz,) bool the pairs still in use, ``blocked`` (N,) bool the failed
-    particles, ``skip`` (N,) bool rows left alone (particles without volume). A row that loses
+    (and detached) particles, ``skip`` (N,) bool rows left alone (particles without volume). A row that loses
     pairs — to a blocked neighbour, or to a
     neighbour whose reference segment X_a–X_b crosses the cell (``shade`` Δx wide) of a blocked
     neighbour — keeps its deformation gradient at the current positions x and stays exact for
@@ -192,11 +196,15 @@ class Cracks:
         before = energy()
         self.failed = failed.copy()
         dsc = self.tlb.disc
-        skip = (self.failed & self.literal) | self.detached
-        cut, det = visible_rows(np.ascontiguousarray(x), dsc.X, self.dx, dsc.indptr, dsc.indices,
-                                dsc.G, self.alive, self.failed, skip, MIN_SINGULAR, SHADE)
-        self.detached |= det
-        self.pairs_cut += int(cut.sum())
+        x = np.ascontiguousarray(x)
+        for _ in range(MAX_CASCADE):  # a detached particle blocks like a failed one
+            skip = (self.failed & self.literal) | self.detached
+            cut, det = visible_rows(x, dsc.X, self.dx, dsc.indptr, dsc.indices, dsc.G, self.alive,
+                                    self.failed | self.detached, skip, MIN_SINGULAR, SHADE)
+            self.pairs_cut += int(cut.sum())
+            if not (det & ~self.detached).any():
+                break
+            self.detached |= det
         dsc.GT[:] = reverse_gradients(dsc.indptr, dsc.indices, dsc.G)
         dsc.V[:] = np.where((self.failed & self.literal) | self.detached, 0.0, self.V0)
         released = before - energy()

@@ -265,6 +265,23 @@ class CSPH(ParticleBody):
         return dict(plastic_work=float(w @ b.history[:, HIST_W_P]),
                     released_energy=float(w @ b.history[:, HIST_W_REL]) + cut)
 
+    def components(self):
+        """(N,) int labels of the connected parts: a pair (a, b) joins a and b when b is still in
+        the row of a (G_ab ≠ 0) and a carries tension (intact: not failed, not detached — a failed
+        particle's row, kept for its compressive response, joins nothing). A crack that has cut
+        the body leaves the parts on either side with different labels."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        d = self.disc
+        rows = np.repeat(np.arange(d.n), np.diff(d.indptr))
+        tension = d.V > 0
+        if self.cracks is not None:
+            tension &= ~self.cracks.failed & ~self.cracks.detached
+        on = tension[rows] & np.any(d.G != 0.0, axis=1)
+        g = coo_matrix((np.ones(on.sum()), (rows[on], d.indices[on])), shape=(d.n, d.n))
+        return connected_components(g, directed=False)[1]
+
     def gradient_form(self):
         return self.tl
 

@@ -14,7 +14,7 @@
    K φ = ω² M φ of the same tangent about X with lumped masses; :class:`~workbench.scenes.model.Explicit`:
    the method's fused time loop in chunks (contact: the generic velocity Verlet with the method's
    force plus :mod:`sph.contact`), loads that vary in time updated at chunk midpoints (chunks of at
-   most :data:`MAX_CHUNK_VARYING` steps then);
+   most :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
 5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`;
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
@@ -37,8 +37,10 @@ record: ``kinetic_energy``, ``strain_energy``, ``external_work``, and ``plastic_
 ``released_energy`` where the body reports them; ``energy_history`` their balance), ``wall_time``
 (the run's cost, set-up included; static: cumulative at each load value), ``loop_time`` (explicit:
 the time loop alone), ``setup_time``, ``n_particles``, ``dt``, ``steps``, the final state
-(explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``failed_particles``
-(N,) bool where the model observes failure), and the scene's quantities.
+(explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``sets`` name →
+indices, ``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the
+connected parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and
+the scene's quantities.
 """
 from __future__ import annotations
 
@@ -332,9 +334,8 @@ class Run:
         body, ps = self.body, self.ps
         dt = body.time_step(drive.dt_factor)
         n_steps = int(math.ceil(drive.t_end / dt))
-        chunk = max(1, n_steps // drive.n_out)
-        if self.varying:
-            chunk = min(chunk, MAX_CHUNK_VARYING)
+        every = max(1, n_steps // drive.n_out)  # steps between records
+        chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
         fixed = np.ascontiguousarray(self.fixed, dtype=np.uint8)
         f_ext = self.dead_forces(0.0)
         v_fix = self.prescribed_velocity(0.0, dt) if self.prescribed else np.zeros_like(ps.X)
@@ -414,6 +415,7 @@ class Run:
         t_loop = 0.0
         t_setup = time.perf_counter() - t0
         every_dis = max(1, drive.n_out // 50)
+        next_record = every
         while body.steps < n_steps:
             k = min(chunk, n_steps - body.steps)
             if self.varying:
@@ -447,9 +449,12 @@ class Run:
                 why = "material point failed (J <= 0 or return mapping)" if body.failed() else "non-finite state"
                 status = f"unstable: {why} at t={body.t:.6g} s"
                 break
-            record()
             if snap:
                 snap(body.steps)
+            if body.steps < min(next_record, n_steps):
+                continue  # loads varying in time: chunks shorter than the interval of records
+            next_record = (body.steps // every + 1) * every
+            record()
             if drive.energy_growth is not None:
                 e_scale = max(e_scale, abs(kes[-1] + ses[-1]))
                 grew, change = energy_change(e0, bal[-1], e_scale, drive.energy_growth)
@@ -483,7 +488,11 @@ class Run:
             out[n] = np.asarray(v)
         # the final state: reference and current positions, regions, and the failed particles
         out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
-                   region_names=list(ps.region_names))
+                   region_names=list(ps.region_names),
+                   sets={k: np.asarray(v).copy() for k, v in ps.sets.items()})
+        parts = body.components()
+        if parts is not None:
+            out["component"] = np.asarray(parts)
         if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
             out["failed_particles"] = self._failed_mask(body.field_state())
         e = np.asarray(bal)

@@ -127,6 +127,11 @@ class ParticleBody:
         None by default (a method whose materials keep no such history)."""
         return {}
 
+    def components(self):
+        """(N,) int labels of the connected parts of the body — particles joined by the pairs
+        through which tension can pass — or None where the method does not say (the default)."""
+        return None
+
     def failed(self) -> bool:
         """Whether a material point failed in the last step (J ≤ 0, no return mapping)."""
         return False

@@ -67,9 +67,13 @@ MIN_SHARE = 0.8
 # over the second half of the time to it (the first half holds the ramp-up of the load, when both
 # energies are small and their ratio is that of the start-up transient).
 TOL_QUASI_STATIC = 0.01
-# Complete separation: the mean load over the last 20 % of the run at most 5 % of the peak (after
-# separation the broken-off beam, carried by the loading patch, still vibrates: the load oscillates
-# about zero with an amplitude of 15–25 % of the peak, its mean is a few per cent at most).
+# Complete separation, "force back to zero" (issue 11): the mean load over the last 20 % of the run
+# within 5 % of the peak load before the first failure. After separation the broken-off beam,
+# carried by the loading patch, still vibrates: the load oscillates about zero with an amplitude
+# of 10–25 % of that peak; its mean is below 2 % in the runs measured. Reported beside it, not
+# gated: whether the loading patch and the held faces are still in one connected part of the body
+# (sph.csph.CSPH.components: a chain of intact particles that still see each other) — a last
+# ligament of one or two particles may carry a per cent of the load for a while.
 TOL_SEPARATION = 0.05
 TAIL = 0.2
 
@@ -140,14 +144,16 @@ FAILED = {"all": "failed", "grains": "failed_grains", "boundaries": "failed_gb"}
 
 
 def run_summary(out: dict, scene: MicroCantilever) -> dict:
-    """The scalars of one run from its result ``out`` (driver output): peak load, deflection and
-    load at the first failure, initial slope, energy balance error, kinetic/elastic ratio before
-    the first failure, failed particles and their share in the grain boundaries, separation."""
+    """The scalars of one run from its result ``out`` (driver output): peak load before the first
+    failure, deflection and load at the first failure, initial slope, energy balance error,
+    kinetic/elastic ratio before the first failure, failed particles and their share in the grain
+    boundaries, the mean load over the last 20 % of the run, separation, whether a chain of
+    intact particles still joins the loading patch and the held faces (``connected``)."""
     nan = float("nan")
     s = dict(peak_load=nan, deflection_at_peak=nan, t_first_failure=nan, load_at_first_failure=nan,
              deflection_at_first_failure=nan, elastic_slope=nan, energy_balance_error=nan,
              kinetic_ratio=nan, n_failed=0, share_boundaries=nan, mean_tail_load=nan,
-             separated=False, crack_regions="")
+             tail_load_ratio=nan, separated=False, connected=nan, crack_regions="")
     if "time" not in out or len(out.get("time", ())) < 3:
         return s
     t = np.asarray(out["time"])
@@ -155,7 +161,10 @@ def run_summary(out: dict, scene: MicroCantilever) -> dict:
     d = np.asarray(out["deflection_down"])
     if not (np.isfinite(F).all() and np.isfinite(d).all()):
         return s
-    k = int(np.argmax(F))
+    fail = np.asarray(out["failed"])
+    first = np.flatnonzero(fail > 0)
+    before = slice(0, int(first[0]) if first.size else len(t))
+    k = int(np.argmax(F[before]))
     s.update(peak_load=float(F[k]), deflection_at_peak=float(d[k]))
     W = np.asarray(out["external_work"])
     E = (np.asarray(out["kinetic_energy"]) + np.asarray(out["strain_energy"])
@@ -163,8 +172,6 @@ def run_summary(out: dict, scene: MicroCantilever) -> dict:
     on = W > 1e-6 * np.max(np.abs(W))
     if on.any():
         s["energy_balance_error"] = float(np.max(np.abs(W[on] - E[on]) / W[on]))
-    fail = np.asarray(out["failed"])
-    first = np.flatnonzero(fail > 0)
     if first.size:
         i = int(first[0])
         s.update(t_first_failure=float(t[i]), load_at_first_failure=float(F[i - 1]),
@@ -187,8 +194,14 @@ def run_summary(out: dict, scene: MicroCantilever) -> dict:
         s["crack_regions"] = ", ".join(f"{n} {c}" for n, c in sorted(counts.items()))
     tail = t >= t[-1] - TAIL * scene.t_end
     s["mean_tail_load"] = float(np.mean(F[tail]))
+    s["tail_load_ratio"] = s["mean_tail_load"] / s["peak_load"]
     s["separated"] = bool(str(out.get("status")) == "ok" and s["peak_load"] > 0
-                          and abs(s["mean_tail_load"]) <= TOL_SEPARATION * s["peak_load"])
+                          and abs(s["tail_load_ratio"]) <= TOL_SEPARATION)
+    parts = out.get("component")
+    if parts is not None:
+        parts = np.asarray(parts)
+        sets = out["sets"]
+        s["connected"] = float(bool(set(parts[sets["patch"]]) & set(parts[sets["held"]])))
     return s
 
 
@@ -239,7 +252,7 @@ def dataset(scene, outs: dict, rules, res) -> xr.Dataset:
     units = dict(peak_load="N", deflection_at_peak="m", t_first_failure="s", load_at_first_failure="N",
                  deflection_at_first_failure="m", elastic_slope="N/m", energy_balance_error="-",
                  kinetic_ratio="-", n_failed="-", share_boundaries="-", mean_tail_load="N",
-                 separated="-", crack_regions="-")
+                 tail_load_ratio="-", separated="-", connected="-", crack_regions="-")
     for k, arr in scal.items():
         if k == "separated":
             arr = arr.astype(float)
@@ -315,8 +328,8 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         sep = "separated" if float(ds.separated.sel(**sel)) == 1.0 else \
             f"not separated ({ds.status.sel(**sel).values})"
         g.append(Gate.expect(f"{tag}: complete separation, no NaN, no crash", sep, "separated",
-                             "the paper's robustness claim; the mean load over the last 20 % of "
-                             "the run within 5 % of the peak"))
+                             "the paper's robustness claim: the mean load over the last 20 % of "
+                             "the run within 5 % of the peak load before failure"))
     return g
 
 
@@ -335,13 +348,18 @@ def report_notes(ds: xr.Dataset) -> list[str]:
     notes = []
     for case, rule, r, sel in _runs(ds, tuple(ds.rule.values)):
         v = {k: ds[k].sel(**sel).values for k in ("peak_load", "t_first_failure", "n_failed",
-                                                   "share_boundaries", "mean_tail_load",
-                                                   "energy_balance_error", "crack_regions")}
-        notes.append(f"{case}, {rule}, H/dx = {r}: peak load {float(v['peak_load']):.4g} N, first "
-                     f"failure at {float(v['t_first_failure']) * 1e6:.3g} us, {int(v['n_failed'])} "
-                     f"failed particles ({100 * float(v['share_boundaries']):.0f} % in grain "
-                     f"boundaries; {v['crack_regions']}), mean load over the last 20 % "
-                     f"{float(v['mean_tail_load']):.3g} N, energy balance error "
+                                                   "share_boundaries", "tail_load_ratio", "separated",
+                                                   "connected", "energy_balance_error",
+                                                   "crack_regions")}
+        notes.append(f"{case}, {rule}, H/dx = {r}: peak load before failure "
+                     f"{float(v['peak_load']):.4g} N, first failure at "
+                     f"{float(v['t_first_failure']) * 1e6:.3g} us, {int(v['n_failed'])} failed "
+                     f"particles ({100 * float(v['share_boundaries']):.0f} % in grain boundaries; "
+                     f"{v['crack_regions']}), "
+                     f"{'separated' if float(v['separated']) == 1 else 'not separated'} (mean load "
+                     f"over the last 20 % {100 * float(v['tail_load_ratio']):.2g} % of that peak; "
+                     f"{'a ligament still joins' if float(v['connected']) == 1 else 'nothing joins'} "
+                     f"the patch and the held faces), energy balance error "
                      f"{float(v['energy_balance_error']):.2e}.")
     return notes
 
