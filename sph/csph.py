@@ -54,8 +54,16 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland
                hourglass="hourglass-control coefficient α ≥ 0 (default 0)",
                gradient="'kernel' (default: the corrected kernel gradient) | 'wls' (HPM's "
                         "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
+<<<<<<< HEAD
                re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)")
 INTEGRATIONS = ("auto", "consistent", "nodal")
+=======
+               re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)",
+               crack="'visibility' (default: an intact particle stops seeing failed particles and "
+                     "what lies behind them, sph.crack) | 'none' (the pairs never change)")
+CRACKS = ("visibility", "none")
+INTEGRATIONS = ("consistent", "nodal")
+>>>>>>> b749945
 GRADIENTS = ("kernel", "wls")
 
 DEFAULT_CORRECTION = "quadratic"
@@ -165,11 +173,20 @@ class CSPH(ParticleBody):
     """A CSPH body built from :class:`sph.particles.Particles` (see the module docstring)."""
 
     name = NAME
+    impulse_in_loop = True
 
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
+<<<<<<< HEAD
                  correction: str = DEFAULT_CORRECTION, integration: str = "auto",
                  hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None):
+=======
+                 correction: str = DEFAULT_CORRECTION, integration: str = "consistent",
+                 hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None,
+                 crack: str = "visibility"):
+>>>>>>> b749945
         super().__init__(particles)
+        if crack not in CRACKS:
+            raise ValueError(f"crack: {crack!r} is not one of {', '.join(map(repr, CRACKS))}")
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient: {gradient!r} is not one of {', '.join(map(repr, GRADIENTS))}")
         if particles.plane == "stress":
@@ -195,15 +212,34 @@ class CSPH(ParticleBody):
         self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
         self.m = disc.m
         self._h_scratch = self.tl.history.copy()
+        self._V_work = disc.V.copy()  # the volumes of the plastic and released work
+        self.cracks = None
+        mats = ps.table.materials
+        breakable = np.array([m.law == "j2" and np.isfinite(m.eps_L) for m in mats], bool)
+        if crack == "visibility" and breakable.any():
+            from .crack import Cracks
+
+            literal = np.array([m.law == "j2" and m.failure == "literal" for m in mats], bool)
+            self.cracks = Cracks(self.tl, ps.dx, literal[ps.mat_id])
+            self._j2 = np.array([m.law == "j2" for m in mats], bool)[ps.mat_id]
 
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
         if extra is not None:
             return super().advance(n, dt, f_ext, fixed, v_fix, damping, extra)
         done = tl.advance(self.tl, self.x, self.v, self.acc, f_ext, fixed, v_fix, dt, damping, n,
-                          self._h_scratch)
+                          self._h_scratch, self.impulse,
+                          self._update_cracks if self.cracks is not None else None)
         self.steps += done
         self.t += done * dt
         return done
+
+    def _update_cracks(self) -> None:
+        """New failures: the pairs of the visibility criterion (:mod:`sph.crack`), the stored
+        energy they release added to the released energy."""
+        from workbench.materials import HIST_DAMAGE
+
+        failed = self._j2 & (self.tl.history[:, HIST_DAMAGE] >= 1.0)
+        self.cracks.update(failed, self.x, self.stored_energy)
 
     def internal_force(self, x):
         return self.tl.evaluate(np.ascontiguousarray(x))
@@ -215,14 +251,60 @@ class CSPH(ParticleBody):
         return bool(np.any(self.tl.status != 0))
 
     def stored_energy(self) -> float:
+        """Π = Σ_a V_a ψ(F_a, h_a), J (J/m in 2-D), the energy whose gradient is the internal
+        force: hyperelastic laws by :func:`sph.diagnostics.strain_energy`; laws with a history
+        (J2, the mortar) by the library's closed form at the committed history
+        (:func:`workbench.materials.kernels.stored_energies`)."""
         from .diagnostics import strain_energy
 
         b = self.tl
         F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
+<<<<<<< HEAD
         e = strain_energy(F, self.disc.V, b.prm, b.mat_id, history=b.history)
+=======
+        if b.history.shape[1] > 0:
+            from workbench.materials.kernels import stored_energies
+
+            V = self.disc.V  # particles without volume (sph.crack) carry no energy, whatever F
+            e = float(V[V > 0] @ stored_energies(F, b.history, b.prm, b.mat_id)[V > 0])
+        else:
+            e = strain_energy(F, self.disc.V, b.prm, b.mat_id)
+>>>>>>> b749945
         if b.K_hg is not None:
             e += 0.5 * float(np.sum(self.x * (b.K_hg @ self.x)))
         return e
+
+    def dissipated(self) -> dict:
+        """``plastic_work`` and ``released_energy``, J: the J2 history columns W_p and W_rel
+        (J/m³) times the integration volumes (the volumes of the stored energy), the released
+        energy with what the crack pairs released (:mod:`sph.crack`)."""
+        from workbench.materials import HIST_W_P, HIST_W_REL
+
+        b = self.tl
+        j2 = np.array([m.law == "j2" for m in b.table.materials], bool)
+        if not j2.any() or b.history.shape[1] <= HIST_W_REL:
+            return {}
+        w = np.where(j2[b.mat_id], self._V_work, 0.0)
+        cut = self.cracks.released if self.cracks is not None else 0.0
+        return dict(plastic_work=float(w @ b.history[:, HIST_W_P]),
+                    released_energy=float(w @ b.history[:, HIST_W_REL]) + cut)
+
+    def components(self):
+        """(N,) int labels of the connected parts: a pair (a, b) joins a and b when b is still in
+        the row of a (G_ab ≠ 0) and a carries tension (intact: not failed, not detached — a failed
+        particle's row, kept for its compressive response, joins nothing). A crack that has cut
+        the body leaves the parts on either side with different labels."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        d = self.disc
+        rows = np.repeat(np.arange(d.n), np.diff(d.indptr))
+        tension = d.V > 0
+        if self.cracks is not None:
+            tension &= ~self.cracks.failed & ~self.cracks.detached
+        on = tension[rows] & np.any(d.G != 0.0, axis=1)
+        g = coo_matrix((np.ones(on.sum()), (rows[on], d.indices[on])), shape=(d.n, d.n))
+        return connected_components(g, directed=False)[1]
 
     def gradient_form(self):
         return self.tl

@@ -14,16 +14,33 @@
    K φ = ω² M φ of the same tangent about X with lumped masses; :class:`~workbench.scenes.model.Explicit`:
    the method's fused time loop in chunks (contact: the generic velocity Verlet with the method's
    force plus :mod:`sph.contact`), loads that vary in time updated at chunk midpoints (chunks of at
-   most :data:`MAX_CHUNK_VARYING` steps then);
+   most :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
 5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`;
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
    :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
 
+Reactions and energies of an explicit run. The force a constraint exerts on a DOF it moves at the
+velocity v_fix is r = m dv_fix/dt − f (f internal plus dead force); its impulse over a chunk is
+m Δv_fix − ∫ f dt, with ∫ f dt the trapezoid sum the method's time loop adds up
+(:attr:`sph.method.ParticleBody.impulse`), and a :class:`~workbench.scenes.model.Reaction` is the
+time mean of Σ r over the interval since the previous record. The external work is that of the dead
+loads, Σ f_ext · Δx, plus that of the constraints, Σ ½ m Δ(v_fix²) at each change of v_fix and
+−v_fix · ∫ f dt over each chunk — velocity Verlet's own discrete work on those DOFs, so that
+``external_work`` = ``kinetic_energy`` + ``strain_energy`` + the energies the body reports as
+dissipated (:meth:`sph.method.ParticleBody.dissipated`: plastic work, energy released by failure)
+holds to the time integration's error.
+
 Returns a dict: ``status`` (or one per load value), ``parameter`` / ``time``, every observable by
-name (an array over the load values or records), energies, ``wall_time`` (the run's cost, set-up
-included; static: cumulative at each load value), ``loop_time`` (explicit: the time loop alone),
-``setup_time``, ``n_particles``, ``dt``, ``steps``, and the scene's quantities.
+name (an array over the load values or records), energies (explicit, J — J/m in 2-D — at each
+record: ``kinetic_energy``, ``strain_energy``, ``external_work``, and ``plastic_work``,
+``released_energy`` where the body reports them; ``energy_history`` their balance), ``wall_time``
+(the run's cost, set-up included; static: cumulative at each load value), ``loop_time`` (explicit:
+the time loop alone), ``setup_time``, ``n_particles``, ``dt``, ``steps``, the final state
+(explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``sets`` name →
+indices, ``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the
+connected parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and
+the scene's quantities.
 """
 from __future__ import annotations
 
@@ -243,14 +260,18 @@ class Run:
         w = self.ps.V[sel] * J[sel]
         return float(np.sum(w * sig[sel, o.i, o.j]) / np.sum(w))
 
-    def _failed_fraction(self, o, state) -> float:
+    def _failed_mask(self, state) -> np.ndarray:
+        """(N,) bool: the J2 particles whose damage has reached 1 (none without a history)."""
         from workbench.materials import HIST_DAMAGE
 
-        sel = self.ps.in_regions(o.regions)
         if state is None or state.get("history") is None or state["history"].shape[1] <= HIST_DAMAGE:
-            return 0.0
+            return np.zeros(self.ps.n, bool)
         j2 = np.array([m.law == "j2" for m in self.ps.table.materials])[self.ps.mat_id]
-        failed = j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+        return j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+
+    def _failed_fraction(self, o, state) -> float:
+        sel = self.ps.in_regions(o.regions)
+        failed = self._failed_mask(state)
         return float(np.count_nonzero(failed[sel]) / max(1, np.count_nonzero(sel)))
 
     # -- static --------------------------------------------------------------------------------
@@ -318,9 +339,8 @@ class Run:
         body, ps = self.body, self.ps
         dt = body.time_step(drive.dt_factor)
         n_steps = int(math.ceil(drive.t_end / dt))
-        chunk = max(1, n_steps // drive.n_out)
-        if self.varying:
-            chunk = min(chunk, MAX_CHUNK_VARYING)
+        every = max(1, n_steps // drive.n_out)  # steps between records
+        chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
         fixed = np.ascontiguousarray(self.fixed, dtype=np.uint8)
         f_ext = self.dead_forces(0.0)
         v_fix = self.prescribed_velocity(0.0, dt) if self.prescribed else np.zeros_like(ps.X)
@@ -343,9 +363,19 @@ class Run:
                               field_frames)
         names = [o.name for o in self.model.observables if not isinstance(o, M.Period)]
         rec = {n: [] for n in names}
-        times, kes, ses, bal, dh, mom = [], [], [], [], [], []
-        diag = {}
-        w_ext = 0.0
+        times, kes, ses, bal, dh, mom, wes = [], [], [], [], [], [], []
+        diag, dis_e = {}, {}
+        w_ext = 0.0  # work of the dead loads and of the constraints (prescribed motion)
+        from .method import ParticleBody
+
+        tracked = (extra is not None or type(body).advance is ParticleBody.advance
+                   or body.impulse_in_loop)
+        fx = self.fixed
+        m_dof = np.broadcast_to(body.m[:, None], fx.shape)
+        r_imp = np.zeros_like(ps.X)  # impulse of the constraint forces since the last record
+        r_time = [0.0]
+        need_state = any(isinstance(o, (M.MeanStress, M.FailedFraction))
+                         for o in self.model.observables)
 
         def record():
             fc, ce = None, 0.0
@@ -353,8 +383,14 @@ class Run:
                 from .contact import contact_forces
 
                 fc, ce = contact_forces(body.x, ps.body, *contact)
-            for n, v in self.observe(body.x, None, None, fc).items():
+            # the force on each particle whose negative the constraints exert: the mean over the
+            # interval since the last record (the state's own force at t = 0)
+            force = (-r_imp / r_time[0] if r_time[0] > 0 else body.acc * body.m[:, None])
+            state = body.field_state() if need_state else None
+            for n, v in self.observe(body.x, force, state, fc).items():
                 rec[n].append(v)
+            r_imp[:] = 0.0
+            r_time[0] = 0.0
             ke, se = body.energies()
             se += ce
             times.append(body.t)
@@ -363,9 +399,13 @@ class Run:
             fresh = (len(times) - 1) % every_diag == 0 or body.steps >= n_steps or not diag
             for n, v in (body.diagnostics() if fresh else {k: d[-1] for k, d in diag.items()}).items():
                 diag.setdefault(n, []).append(v)
+            lost = body.dissipated()
+            for n, v in lost.items():
+                dis_e.setdefault(n, []).append(v)
             kes.append(ke)
             ses.append(se)
-            bal.append(ke + se - w_ext)
+            wes.append(w_ext)
+            bal.append(ke + se + sum(lost.values()) - w_ext)
             mom.append(linear_momentum(body.m, body.v))
 
         every_diag = max(1, drive.n_out // 50)
@@ -381,6 +421,7 @@ class Run:
         t_loop = 0.0
         t_setup = time.perf_counter() - t0
         every_dis = max(1, drive.n_out // 50)
+        next_record = every
         while body.steps < n_steps:
             k = min(chunk, n_steps - body.steps)
             if self.varying:
@@ -391,19 +432,35 @@ class Run:
             else:
                 f_new = f_ext
             x_before = body.x.copy()
+            # a change of the prescribed velocity: the constraint's impulse m Δv and work Δ(½ m v²)
+            dv = np.where(fx, v_fix - body.v, 0.0)
+            r_imp += m_dof * dv
+            w_ext += 0.5 * float(np.sum(m_dof * dv * (v_fix + body.v)))
+            f_before = body.acc * body.m[:, None]
+            body.impulse[:] = 0.0
             tl0 = time.perf_counter()
             done = body.advance(k, dt, f_new, fixed, v_fix, drive.damping, extra)
             t_loop += time.perf_counter() - tl0
             w_ext += float(np.sum(f_new * (body.x - x_before)))
+            # the constraints: r = −f on a DOF moving at v_fix, work −v_fix · ∫ f dt
+            imp = (body.impulse if tracked else
+                   0.5 * done * dt * (f_before + body.acc * body.m[:, None]))
+            imp = np.where(fx, imp, 0.0)
+            w_ext -= float(np.sum(v_fix * imp))
+            r_imp -= imp
+            r_time[0] += done * dt
             f_ext = f_new
             if done < k or not np.isfinite(body.x).all():
                 criterion = "non-finite"
                 why = "material point failed (J <= 0 or return mapping)" if body.failed() else "non-finite state"
                 status = f"unstable: {why} at t={body.t:.6g} s"
                 break
-            record()
             if snap:
                 snap(body.steps)
+            if body.steps < min(next_record, n_steps):
+                continue  # loads varying in time: chunks shorter than the interval of records
+            next_record = (body.steps // every + 1) * every
+            record()
             if drive.energy_growth is not None:
                 e_scale = max(e_scale, abs(kes[-1] + ses[-1]))
                 grew, change = energy_change(e0, bal[-1], e_scale, drive.energy_growth)
@@ -426,13 +483,24 @@ class Run:
                    wall_time=time.perf_counter() - t0, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
                    kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
-                   energy_history=np.asarray(bal), external_work=w_ext,
+                   energy_history=np.asarray(bal), external_work=np.asarray(wes),
                    linear_momentum=np.asarray(mom),
                    particle_steps_per_second=ps.n * body.steps / t_loop if t_loop > 0 else math.nan)
         for n in names:
             out[n] = np.asarray(rec[n])
         for n, v in diag.items():
             out[n] = np.asarray(v)
+        for n, v in dis_e.items():
+            out[n] = np.asarray(v)
+        # the final state: reference and current positions, regions, and the failed particles
+        out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
+                   region_names=list(ps.region_names),
+                   sets={k: np.asarray(v).copy() for k, v in ps.sets.items()})
+        parts = body.components()
+        if parts is not None:
+            out["component"] = np.asarray(parts)
+        if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
+            out["failed_particles"] = self._failed_mask(body.field_state())
         e = np.asarray(bal)
         drift = float((e[-1] - e[0]) / e_scale) if e_scale > 0 else math.nan
         if drive.energy_growth is None:

@@ -30,6 +30,10 @@ class ParticleBody:
     """Base class: the state arrays and the parts every method shares."""
 
     name = "method"
+    impulse_in_loop = False
+    """Whether the method's own fused time loop (an override of :meth:`advance`) adds to
+    :attr:`impulse`; the generic loop always does. Where neither does, the driver samples the force
+    on the fixed DOFs at the end of each chunk instead."""
     normals = None
     """The boundary area vectors (N, d) the method's surface loads must use (an integration-
     consistent method: those it enforced), or None: the particles' own."""
@@ -43,6 +47,10 @@ class ParticleBody:
         self.m = particles.m
         self.t = 0.0
         self.steps = 0
+        self.impulse = np.zeros_like(self.x)
+        """(N, d): the impulse Σ ½ (f_n + f_n+1) dt of the force (internal plus dead) on each
+        fixed DOF, added by :meth:`advance` (the driver zeroes it; the reactions and the work of
+        prescribed motion follow from it)."""
 
     @property
     def n(self) -> int:
@@ -73,17 +81,22 @@ class ParticleBody:
                 extra=None) -> int:
         """``n`` velocity-Verlet steps (:mod:`sph.integrate`) under the dead forces ``f_ext``
         (N, d), the ``fixed`` DOFs (N, d) following ``v_fix``, mass-proportional ``damping`` and an
-        optional ``extra(x) -> (N, d)`` force (contact). Returns the steps completed (fewer when a
+        optional ``extra(x) -> (N, d)`` force (contact); the impulse on the fixed DOFs is added to
+        :attr:`impulse`. Returns the steps completed (fewer when a
         material point failed or the state became non-finite). This generic loop calls
         :meth:`internal_force` per step; methods override it with their fused loop for the case
         without ``extra``."""
         from .integrate import kick, kick_drift
 
+        fx = fixed.astype(bool)
         for s in range(n):
             kick_drift(self.x, self.v, self.acc, fixed, v_fix, dt, damping)
+            f_old = self.acc * self.m[:, None]
             f = self.internal_force(self.x) + f_ext
             if extra is not None:
                 f = f + extra(self.x)
+            if self.impulse is not None:
+                self.impulse[fx] += 0.5 * dt * (f_old + f)[fx]
             self.acc[:] = f / self.m[:, None]
             kick(self.v, self.acc, fixed, v_fix, dt, damping)
             self.commit()
@@ -106,6 +119,18 @@ class ParticleBody:
         """(kinetic, stored) energy, J (J/m in 2-D)."""
         ke = 0.5 * float(np.einsum("a,ak,ak->", self.m, self.v, self.v))
         return ke, self.stored_energy()
+
+    def dissipated(self) -> dict:
+        """Energies that left the stored energy for good, J (J/m in 2-D), by name: for J2
+        materials ``plastic_work`` Σ V W_p and ``released_energy`` Σ V W_rel (the history columns
+        of :mod:`workbench.materials.layout`), so that external work = kinetic + stored + these.
+        None by default (a method whose materials keep no such history)."""
+        return {}
+
+    def components(self):
+        """(N,) int labels of the connected parts of the body — particles joined by the pairs
+        through which tension can pass — or None where the method does not say (the default)."""
+        return None
 
     def failed(self) -> bool:
         """Whether a material point failed in the last step (J ≤ 0, no return mapping)."""

@@ -118,9 +118,19 @@ def deformation_gradients(x, indptr, indices, G):
 def _stress_row(a, x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, F, P, A, h_new,
                 VP, F_all, A_all, status):
     """F_a (eq. 35) → P_a by the shared material routine (row ``mat_id[a]`` of the parameter
-    table) → VP_a = V_a P_a (d×d block). Also J_a > 0 is checked (status 1000 otherwise)."""
+    table) → VP_a = V_a P_a (d×d block). Also J_a > 0 is checked (status 1000 otherwise). A
+    particle without integration volume (V_a = 0: a clamped corner, a particle failed under the
+    'literal' rule, :mod:`sph.crack`) carries no stress: VP_a = 0, history kept, its material not
+    evaluated."""
     d = x.shape[1]
     _deformation_gradient_row(a, x, indptr, indices, G, F)
+    if V[a] == 0.0:
+        _inactive_row(a, h_old, h_new, VP, status)
+        if F_all.shape[0] > 0:
+            for i in range(3):
+                for j in range(3):
+                    F_all[a, i, j] = F[i, j]
+        return
     J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
          - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
          + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
@@ -145,6 +155,17 @@ def _stress_row(a, x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, F
                 for k in range(d):
                     for l in range(d):
                         A_all[a, i, j, k, l] = A[i, j, k, l]
+
+
+@njit(inline="always", **JIT)
+def _inactive_row(a, h_old, h_new, VP, status):
+    """A particle without integration volume: VP_a = 0, status 0, history carried."""
+    for i in range(VP.shape[1]):
+        for j in range(VP.shape[2]):
+            VP[a, i, j] = 0.0
+    for k in range(h_old.shape[1]):
+        h_new[a, k] = h_old[a, k]
+    status[a] = 0
 
 
 @njit(parallel=True, **JIT)
@@ -397,13 +418,20 @@ def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
 
 @njit(parallel=True, fastmath=FASTMATH, **JIT)
 def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, indices, G, GT, V,
-             h_a, h_b, prm, mat_id, all_svk, VP, status, hg_indptr, hg_indices, hg_data):
+             h_a, h_b, prm, mat_id, all_svk, VP, status, hg_indptr, hg_indices, hg_data, imp,
+             dcol):
     """``n_steps`` velocity-Verlet steps from the synchronised state (x, v, acc):
     kick–drift; F → P (shared material routine) → V P; force → acceleration → kick.
     ``h_a`` holds the committed history on entry and on exit (``h_b`` is scratch). The hourglass
-    stiffness K_s (CSR arrays, empty when off) adds −K_s x to the force. Returns the first step
-    with a failed material point (status ≠ 0) or −1."""
+    stiffness K_s (CSR arrays, empty when off) adds −K_s x to the force. ``imp`` (N, d), or
+    (0, d) to skip: adds on every fixed DOF the impulse of the force acting on it,
+    Σ_steps ½ (f_n + f_n+1) dt (:func:`_impulse_row`). ``dcol`` ≥ 0: the damage column of the
+    J2 history — the loop stops after the first step in which a J2 point reaches D ≥ 1 (for the
+    pairs of :mod:`sph.crack` to be updated); −1: no such stop. Returns (steps done, why): why
+    0 all done, 1 a failed material point (status ≠ 0) in the last step, 2 a point newly
+    damaged."""
     N, d = x.shape
+    track = imp.shape[0] > 0
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
     dummyF = np.zeros((0, 3, 3))
     dummyA = np.zeros((0, d, d, d, d))
@@ -416,6 +444,7 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
         kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
     for s in range(n_steps):
         nbad = 0
+        nnew = 0
         for c in prange(N_CHUNKS):
             F = np.zeros((3, 3))
             P = np.empty((3, 3))
@@ -428,10 +457,15 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
                     _stress_row(a, x, indptr, indices, G, V, h_a, prm, mat_id, False, F, P, A,
                                 h_b, VP, dummyF, dummyA, status)
                     nbad += status[a] != 0
-        last = s == n_steps - 1 or nbad > 0
+                if dcol >= 0 and prm[mat_id[a], 0] == 3.0 and h_b[a, dcol] >= 1.0 and h_a[a, dcol] < 1.0:
+                    nnew += 1
+        last = s == n_steps - 1 or nbad > 0 or nnew > 0
         drift_here = fuse and not last
         for a in prange(N):
             # f_a = Σ_b (V_a P_a G_ab − V_b P_b G_ba); a = (f + f_ext)/m; second half kick
+            o0 = acc[a, 0] * m[a]  # the force of the previous step (for the impulse)
+            o1 = acc[a, 1] * m[a]
+            o2 = acc[a, d - 1] * m[a]
             if d == 2:
                 _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, acc)
             else:
@@ -442,6 +476,8 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
                 for i in range(d):
                     for q in range(hg_indptr[a], hg_indptr[a + 1]):
                         acc[a, i] -= hg_data[q] * x[hg_indices[q], i]
+            if track:
+                _impulse_row(a, acc, fixed, o0, o1, o2, dt, imp)
             ma = 1.0 / m[a]
             for i in range(d):
                 acc[a, i] *= ma
@@ -453,11 +489,27 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
                 for k in range(h_a.shape[1]):
                     h_a[a, k] = h_b[a, k]
         if nbad > 0:
-            return s
+            return s + 1, 1
+        if nnew > 0:
+            return s + 1, 2
         if not fuse and not last:
             for a in prange(N):
                 kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
-    return -1
+    return n_steps, 0
+
+
+@njit(inline="always", **JIT)
+def _impulse_row(a, f, fixed, o0, o1, o2, dt, imp):
+    """imp[a, k] += ½ (f_n + f_n+1)_k dt on the fixed DOFs k of particle a: the trapezoid impulse
+    of the force (internal plus dead) over one step, o the force f_n of the step before, f[a] the
+    new one. For a DOF moving at the constant velocity v_fix the constraint then does the work
+    −v_fix · imp: velocity Verlet's discrete work on it, Σ ½ (f_n + f_n+1) · (x_n+1 − x_n)."""
+    if fixed[a, 0]:
+        imp[a, 0] += 0.5 * dt * (o0 + f[a, 0])
+    if fixed[a, 1]:
+        imp[a, 1] += 0.5 * dt * (o1 + f[a, 1])
+    if f.shape[1] == 3 and fixed[a, 2]:
+        imp[a, 2] += 0.5 * dt * (o2 + f[a, 2])
 
 
 @njit(inline="always", **JIT)
@@ -466,6 +518,9 @@ def _stress_row_2d(a, x, indptr, indices, G, V, h_old, prm, mat_id, all_svk, F, 
     """2-D specialisation of :func:`_stress_row` (scalar accumulation of eq. 35, F33 = 1; a body
     of Saint Venant–Kirchhoff materials calls that law directly from the shared library, others go
     through ``material_point``). Returns 1 if the point failed, else 0."""
+    if V[a] == 0.0:
+        _inactive_row(a, h_old, h_new, VP, status)
+        return 0
     xa0 = x[a, 0]
     xa1 = x[a, 1]
     f00 = 0.0
@@ -529,11 +584,17 @@ def _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, out):
 
 
 def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: float,
-            n_steps: int, h_scratch) -> int:
+            n_steps: int, h_scratch, impulse=None, on_damage=None) -> int:
     """``n_steps`` fused velocity-Verlet steps of ``body`` from the synchronised state (x, v, acc),
-    in place; ``f_ext`` (N, d) dead forces, ``fixed`` (N, d) uint8 DOFs following ``v_fix``.
-    Bodies under :data:`SERIAL_BELOW` particles run on one thread. Returns the steps completed
-    (fewer when a material point failed: J ≤ 0 or the return mapping)."""
+    in place; ``f_ext`` (N, d) dead forces, ``fixed`` (N, d) uint8 DOFs following ``v_fix``;
+    ``impulse`` (N, d) or None: the impulse of the force on each fixed DOF is added to it
+    (:func:`_impulse_row`); ``on_damage()``, or None: called at the synchronised state after
+    every step in which a J2 point reached D ≥ 1 (:mod:`sph.crack` updates the pairs there), the
+    steps then go on. Bodies under :data:`SERIAL_BELOW` particles run on one thread.
+    Returns the steps completed (fewer when a material point failed: J ≤ 0 or the return
+    mapping)."""
+    from workbench.materials import HIST_DAMAGE
+
     import numba
 
     dsc = body.disc
@@ -543,10 +604,20 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
     nt = numba.get_num_threads()
     if dsc.n < SERIAL_BELOW:
         numba.set_num_threads(1)
+    imp = impulse if impulse is not None else np.zeros((0, x.shape[1]))
+    dcol = HIST_DAMAGE if on_damage is not None and body.history.shape[1] > HIST_DAMAGE else -1
+    done = 0
     try:
-        bad = _advance(n_steps, x, v, acc, dsc.m, f_ext, fixed, v_fix, dt, damping, dsc.indptr,
-                       dsc.indices, dsc.G, dsc.GT, dsc.V, body.history, h_scratch, body.prm,
-                       body.mat_id, body.table.all_svk, body.VP, body.status, *hg)
+        while done < n_steps:
+            k, why = _advance(n_steps - done, x, v, acc, dsc.m, f_ext, fixed, v_fix, dt, damping,
+                              dsc.indptr, dsc.indices, dsc.G, dsc.GT, dsc.V, body.history,
+                              h_scratch, body.prm, body.mat_id, body.table.all_svk, body.VP,
+                              body.status, *hg, imp, dcol)
+            done += int(k)
+            if why == 1:
+                break
+            if why == 2:
+                on_damage()
     finally:
         numba.set_num_threads(nt)
-    return n_steps if bad < 0 else int(bad) + 1
+    return done

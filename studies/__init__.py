@@ -9,6 +9,7 @@ STUDIES = {
     "cantilever": "studies.cantilever",
     "plate": "studies.plate",
     "stability": "studies.stability",
+    "microcantilever": "studies.microcantilever",
 }
 # The studies that `workbench verify` runs, in order.
 HEADLINE = ("ss_curve", "cantilever", "plate", "stability")

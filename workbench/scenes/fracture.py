@@ -5,16 +5,26 @@ five Voronoi grains and the four grain boundaries between them, the grain at the
 with the fixed block, finite-strain J2 with Swift hardening and the damage D = ε_p/ε_L of eq. 36;
 inter-granular (ε_L = 0.002 on the grain boundaries) or intra-granular (in the grains) fracture.
 
-The paper gives no dimensions; our choices (parameters, ``--set`` changes them): a beam
+The paper gives no dimensions: our choices (parameters, ``--set`` changes them): a beam
 L × B × H = 20 × 5 × 5 µm on a block 5 µm long, 10 µm wide and 10 µm high (the beam's top flush
 with the block's), the block's back face and bottom face held; the load a downward velocity of the
-top-face patch 2–4 µm from the free end (ramped up over ``t_ramp``); grain boundaries 0.5 µm thick
-(``gb_thickness``). Grains: the Voronoi cells (nearest-seed assignment, exact for any point — no
+top-face patch 2–4 µm from the free end, 0.2 m/s, ramped up over 0.5 µs (about five periods
+of the beam's first bending mode, ~0.1 µs: the kinetic energy stays below 1 % of the elastic
+energy before the first failure); 5 µs simulated (the first failure near 0.7–1 µs; the last
+ligament of the crack can take until about 4 µs to break at H/Δx = 10); grain boundaries 1 µm thick (``gb_thickness``: one particle spacing at resolution
+5, the coarsest that resolves them). The resolution r puts r particles across H (spacing H/r).
+2-D runs are plane strain (csph does not model plane stress). Grains: the Voronoi cells (nearest-seed assignment, exact for any point — no
 polyhedra are built) of ``n_grains`` seeds placed one per equal slice of the beam's length, jittered
 inside their slice and across the section by a seeded generator (``seed``); a grain boundary is
 the set of points within half its thickness of the bisector plane of the two nearest seeds, when
 those are consecutive grains (:class:`GrainBoundary`). With seeds ordered along the beam, each
 grain meets only its neighbours, so there are ``n_grains − 1`` boundaries, as in Fig. 2.
+
+Observables: ``force`` the reaction on the loading patch (the time mean over each output
+interval, :mod:`sph.driver`), ``support`` the reaction on the held faces, ``deflection`` the
+patch's mean displacement, and the failed fraction of all particles, of the grains, of the grain
+boundaries and of each region; explicit runs also record the energies (external work, kinetic,
+stored, plastic work, released by failure).
 """
 from __future__ import annotations
 
@@ -77,9 +87,11 @@ class MicroCantilever(Scene):
     H: float = param(5e-6, "m", "beam height", lo=0, lo_open=True)
     block: float = param(5e-6, "m", "length of the support block behind the beam", lo=0, lo_open=True)
     block_depth: float = param(5e-6, "m", "depth of the block below the beam", lo=0)
-    gb_thickness: float = param(0.5e-6, "m", "grain-boundary thickness", lo=0, lo_open=True)
-    n_grains: int = param(5, "-", "grains along the beam (a positive integer)", lo=1, hi=50)
-    seed: int = param(3, "-", "seed of the Voronoi seeds", lo=0)
+    gb_thickness: float = param(1.0e-6, "m", "grain-boundary thickness (at least one particle "
+                                "spacing, below the grain size and H)", lo=0, lo_open=True)
+    n_grains: int = param(5, "-", "grains along the beam, the Voronoi seed count (a positive integer)",
+                          lo=1, hi=50)
+    seed: int = param(3, "-", "seed of the random generator placing the Voronoi seeds", lo=0)
     jitter: float = param(0.3, "-", "seed jitter within its slice, over the slice length", lo=0, hi=0.5)
     E_gb: float = param(TABLE3_E, "Pa", "Young's modulus of the grain boundaries (Table 3)", lo=0, lo_open=True)
     nu: float = param(0.3, "-", "Poisson's ratio", lo=-1, hi=0.5, lo_open=True, hi_open=True)
@@ -92,15 +104,23 @@ class MicroCantilever(Scene):
     failure: str = param("compression", "-", "failed particle: keeps compression, or literal (stress 0)",
                          choices=("compression", "literal"))
     band: float = param(0.0, "m", "crack-band width (0: eps_L as given; > 0: eps_L scaled by band/spacing)", lo=0)
-    velocity: float = param(0.5, "m/s", "downward velocity of the loading patch", lo=0, lo_open=True)
-    t_ramp: float = param(2e-7, "s", "time over which the velocity is ramped up", lo=0, lo_open=True)
-    t_end: float = param(4e-6, "s", "simulated time", lo=0, lo_open=True)
+    velocity: float = param(0.2, "m/s", "downward velocity of the loading patch", lo=0, lo_open=True)
+    t_ramp: float = param(5e-7, "s", "time over which the velocity is ramped up", lo=0, lo_open=True)
+    t_end: float = param(5e-6, "s", "simulated time", lo=0, lo_open=True)
     dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10, lo_open=True)
 
     def check(self):
-        if self.gb_thickness >= min(self.H, self.L / self.n_grains):
+        for name in ("n_grains", "seed"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise ParameterError(f"{name}: {v!r} is not allowed; allowed: a positive integer"
+                                     if name == "n_grains" else
+                                     f"{name}: {v!r} is not allowed; allowed: an integer >= 0")
+        top = min(self.H, self.L / self.n_grains)
+        if self.gb_thickness >= top:
             raise ParameterError(f"gb_thickness: {self.gb_thickness:g} m is out of range; allowed: "
-                                 f"(spacing, {min(self.H, self.L / self.n_grains):g}) m")
+                                 f"[one particle spacing, {top:g}) m (below the grain size L/n_grains "
+                                 f"and H)")
 
     # -- geometry -----------------------------------------------------------------------------
     def seeds(self) -> np.ndarray:
@@ -168,11 +188,13 @@ class MicroCantilever(Scene):
             dim=d, plane="strain" if d == 2 else None, length=self.H, name=self.name,
             regions=tuple(regions),
             sets=(m.Set("back", Plane(0, lo[0])), m.Set("bottom", Plane(up, lo[up])),
+                  m.Set("held", Union((Plane(0, lo[0]), Plane(up, lo[up])))),
                   m.Set("patch", patch)),
             constraints=(m.Clamp("back"), m.Clamp("bottom"),
                          m.Prescribed("patch", up, velocity=v)),
             drive=m.Explicit(self.t_end, self.dt_factor, n_out=400, energy_growth=None),
-            observables=(m.Reaction("force", "patch", up), m.Displacement("deflection", "patch", up),
+            observables=(m.Reaction("force", "patch", up), m.Reaction("support", "held", up),
+                         m.Displacement("deflection", "patch", up),
                          m.FailedFraction("failed", None),
                          m.FailedFraction("failed_grains", grain_names),
                          m.FailedFraction("failed_gb", gb_names),
@@ -181,7 +203,8 @@ class MicroCantilever(Scene):
                    f"grain boundaries {self.gb_thickness * 1e6:g} um thick; grain 0 merged with the block",))
 
     def summarise(self, out: dict) -> dict:
-        """``load`` (N: the force the loading patch exerts on the beam, positive downward) and
-        ``deflection_down`` (m: the patch's mean displacement, positive downward) histories."""
+        """``load`` (N; N/m in 2-D: the force the loading patch exerts on the beam, positive
+        downward) and ``deflection_down`` (m: the patch's mean displacement, positive downward)
+        histories."""
         return dict(load=-np.asarray(out.get("force", ()), float),
                     deflection_down=-np.asarray(out.get("deflection", ()), float))

@@ -298,7 +298,9 @@ class Position:
 
 @dataclass(frozen=True)
 class Reaction:
-    """Total force (N; N/m in 2-D) the constraints exert on the set along ``axis``."""
+    """Total force (N; N/m in 2-D) the constraints exert on the set along ``axis``: at each load
+    value of a static drive; in an explicit drive its time mean over the interval since the
+    previous record (the constraint impulse over the interval's length, :mod:`sph.driver`)."""
 
     name: str
     set: str

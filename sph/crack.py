@@ -1,0 +1,212 @@
+"""Cracks in a gradient-form body (CSPH): which neighbour pairs still interact once particles have
+failed (damage D = ε_p/ε_L ≥ 1, paper 000 eq. 36).
+
+The paper says only "stress zero once D ≥ 1". With neighbours fixed in the reference
+configuration that is not enough for a crack to open: an intact particle's deformation gradient
+F_a = Σ_b (x_b − x_a) ⊗ G_ab (eq. 35) still sees the neighbours on the far side of a band of failed
+particles (the kernel support, 2h = 2.2 Δx, reaches across a band one particle wide) and the failed
+particles themselves, whose positions follow both faces; the opening of the band is read as a
+strain of the intact particles beside it, which keep pulling the faces together, and the load does
+not fall to zero (measured: the micro-cantilever keeps about half its peak load, studies
+``microcantilever``).
+
+The rule here is the *visibility criterion* of meshfree crack modelling (Belytschko, Lu & Gu 1994;
+Organ, Fleming, Terry & Belytschko 1996), with a failed particle as the opaque body: the row of any
+particle a drops the pair (a, b) when b has failed or when the segment X_a–X_b passes through the
+interior of the cell (the cube of side Δx centred on the particle) of a failed neighbour of a, in
+the reference configuration (:func:`visible_rows`). So two failed particles no longer interact,
+an intact particle no longer sees failed ones nor what lies behind them, and a failed particle
+still sees the intact particles around it: its F, and so its compressive response (the
+'compression' failure mode), follows the faces of the crack, which push on each other through it
+when it closes.
+
+A row that loses pairs is corrected again so that its F stays exact for affine motions — but from
+the current configuration, not the reference one: with F = Σ_alive (x_b − x_a) ⊗ G_ab and
+N = Σ_kept (x_b − x_a) ⊗ G_ab at the current positions, G'_ab = (N⁻¹ F)ᵀ G_ab on the kept pairs.
+Then F is continuous at the change (Σ_kept (x_b − x_a) ⊗ G'_ab = F: no jump of stress or stored
+energy, which a correction on the reference configuration gives wherever the displacement is not
+affine — near a crack tip, everywhere), and any later affine motion x ↦ A x + c gives A F. Where
+what a still sees hardly spans a direction (a sliver between a crack and a free surface), N⁻¹ F
+would multiply the gradients — the stiffness — without bound and the explicit step would go
+unstable: when the smallest singular value of F⁻¹ N is below :data:`MIN_SINGULAR` the particle is
+*detached* instead (its row emptied, its integration volume zero: a fragment that keeps its mass
+and moves on freely), and from then on it blocks the view of the others as a failed particle does
+(else, seen from both faces, it would pass forces across the crack). The integration-consistent correction of the body is left as it is near a
+crack.
+
+Under the 'literal' failure mode a failed particle keeps no stress at all; the body gives it zero
+integration volume too, so it takes no part in any force and its F is not evaluated (no inverted
+particle stops the run). Every change of the pairs leaves the stored energy Π = Σ V_a ψ(F_a)
+unchanged except for what a detached particle takes with it; the difference before − after is
+recorded as energy released by cracking, so that the energy balance stays closed.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .correction import reverse_gradients
+from .kernels import JIT
+
+SHADE = 1.0 - 1e-6
+"""Width of the opaque cell of a failed particle over Δx: its interior (a segment that only grazes a
+cell's face or corner, as between two particles of a straight lattice row beside a failed one, is
+not cut)."""
+MAX_CASCADE = 50
+"""Most rounds of detachment per update (a detached particle blocks its neighbours' view as a
+failed one does, which may detach another)."""
+MIN_SINGULAR = 0.4
+"""Smallest singular value of F⁻¹ N (= M_a, Σ_kept (X_b − X_a) ⊗ G_ab, for an affine state; I for
+a full row, about 0.5 in the normal direction for a particle on the face of a crack, as for one on
+a free surface) for which a row is corrected: its gradients grow by at most 1/0.4 = 2.5. Below it
+the particle is detached. (An earlier form of the rule with 0.3 went unstable in the
+micro-cantilever at H/Δx = 10 after the crack had opened; with 0.4 every run of that study is
+stable.)"""
+
+
+@njit(inline="always", **JIT)
+def _segment_hits_cell(xa, xb, c, half):
+    """Whether the segment xa–xb meets the closed cube of half-width ``half`` centred on c (slab
+    method)."""
+    t0 = 0.0
+    t1 = 1.0
+    for k in range(xa.shape[0]):
+        d = xb[k] - xa[k]
+        lo = c[k] - half - xa[k]
+        hi = c[k] + half - xa[k]
+        if d == 0.0:
+            if lo > 0.0 or hi < 0.0:
+                return False
+        else:
+            s0 = lo / d
+            s1 = hi / d
+            if s0 > s1:
+                s0, s1 = s1, s0
+            if s0 > t0:
+                t0 = s0
+            if s1 < t1:
+                t1 = s1
+            if t0 > t1:
+                return False
+    return True
+
+
+@njit(parallel=True, **JIT)
+def visible_rows(x, X, dx, indptr, indices, G, alive, blocked, skip, s_min, shade):
+    """One update of the visibility criterion (module docstring), in place: G (nnz, d) the current
+    gradients, ``alive`` (nnz,) bool the pairs still in use, ``blocked`` (N,) bool the failed
+    (and detached) particles, ``skip`` (N,) bool rows left alone (particles without volume). A row that loses
+    pairs — to a blocked neighbour, or to a
+    neighbour whose reference segment X_a–X_b crosses the cell (``shade`` Δx wide) of a blocked
+    neighbour — keeps its deformation gradient at the current positions x and stays exact for
+    affine motions from there on: G'_ab = Cᵀ G_ab on the kept pairs with C = N⁻¹ F, F = Σ_alive
+    (x_b − x_a) ⊗ G_ab, N = Σ_kept (x_b − x_a) ⊗ G_ab. Where the smallest singular value of
+    F⁻¹ N is below ``s_min`` (:data:`MIN_SINGULAR`) the particle is detached instead: its row is
+    zeroed. Returns (pairs dropped (N,), detached (N,) bool)."""
+    N, d = x.shape
+    half = 0.5 * dx * shade
+    cut = np.zeros(N, np.int64)
+    detached = np.zeros(N, np.bool_)
+    for a in prange(N):
+        if skip[a]:
+            continue
+        lo, hi = indptr[a], indptr[a + 1]
+        keep = np.empty(hi - lo, np.bool_)
+        lost = 0
+        for p in range(lo, hi):
+            b = indices[p]
+            k = alive[p] and not blocked[b]
+            if k and shade > 0.0:
+                for q in range(lo, hi):
+                    c = indices[q]
+                    if c != b and blocked[c] and _segment_hits_cell(X[a], X[b], X[c], half):
+                        k = False
+                        break
+            keep[p - lo] = k
+            if alive[p] and not k:
+                lost += 1
+        if lost == 0:
+            continue
+        F = np.zeros((d, d))
+        Nm = np.zeros((d, d))
+        for p in range(lo, hi):
+            if alive[p]:
+                b = indices[p]
+                for i in range(d):
+                    for j in range(d):
+                        v = (x[b, i] - x[a, i]) * G[p, j]
+                        F[i, j] += v
+                        if keep[p - lo]:
+                            Nm[i, j] += v
+        detF = np.linalg.det(F)
+        smin = 0.0
+        if detF > 0.0:
+            smin = np.linalg.svd(np.linalg.solve(F, Nm))[1][d - 1]  # of F⁻¹ N
+        C = np.zeros((d, d))
+        if smin >= s_min:
+            C = np.linalg.solve(Nm, F)
+        else:
+            detached[a] = True
+        for p in range(lo, hi):
+            if keep[p - lo] and not detached[a]:
+                g = np.zeros(d)
+                for i in range(d):  # G' = Cᵀ G: G'_i = Σ_j C[j, i] G_j
+                    for j in range(d):
+                        g[i] += C[j, i] * G[p, j]
+                for i in range(d):
+                    G[p, i] = g[i]
+            else:
+                if alive[p]:
+                    cut[a] += 1
+                alive[p] = False
+                for i in range(d):
+                    G[p, i] = 0.0
+    return cut, detached
+
+
+class Cracks:
+    """The visibility criterion on a :class:`sph.total_lagrangian.Body` (module docstring).
+
+    ``tlb`` the body (its gradients, reverse gradients and volumes are changed in place), ``dx``
+    the spacing, m; ``literal`` (N,) bool the particles whose failure mode leaves no stress (their
+    integration volume goes to zero once failed). :meth:`update` applies the rule when the failed
+    set has grown and returns the stored energy released by the change, J. ``failed``,
+    ``detached`` (N,) bool, ``pairs_cut`` and ``released`` (J) are the state so far."""
+
+    def __init__(self, tlb, dx: float, literal: np.ndarray):
+        self.tlb = tlb
+        self.dx = float(dx)
+        dsc = tlb.disc
+        self.alive = np.ones(dsc.indices.shape[0], bool)
+        self.V0 = dsc.V.copy()
+        self.literal = np.asarray(literal, bool)
+        self.failed = np.zeros(dsc.n, bool)
+        self.detached = np.zeros(dsc.n, bool)
+        self.pairs_cut = 0
+        self.released = 0.0
+
+    def update(self, failed: np.ndarray, x: np.ndarray, energy) -> float:
+        """Apply the criterion at the current positions x (N, d) for the failed set ``failed``
+        (N,) bool if it grew; ``energy()`` gives the stored energy at the current state (called
+        before and after: a detached particle takes its energy with it). Returns the energy
+        released by this change, J."""
+        failed = np.asarray(failed, bool)
+        if not (failed & ~self.failed).any():
+            return 0.0
+        before = energy()
+        self.failed = failed.copy()
+        dsc = self.tlb.disc
+        x = np.ascontiguousarray(x)
+        for _ in range(MAX_CASCADE):  # a detached particle blocks like a failed one
+            skip = (self.failed & self.literal) | self.detached
+            cut, det = visible_rows(x, dsc.X, self.dx, dsc.indptr, dsc.indices, dsc.G, self.alive,
+                                    self.failed | self.detached, skip, MIN_SINGULAR, SHADE)
+            self.pairs_cut += int(cut.sum())
+            if not (det & ~self.detached).any():
+                break
+            self.detached |= det
+        dsc.GT[:] = reverse_gradients(dsc.indptr, dsc.indices, dsc.G)
+        dsc.V[:] = np.where((self.failed & self.literal) | self.detached, 0.0, self.V0)
+        released = before - energy()
+        self.released += released
+        return released

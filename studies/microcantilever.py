@@ -1,0 +1,465 @@
+"""Micro-cantilever study: inter- and intra-granular fracture of a ceramic micro-cantilever with five
+Voronoi grains and four grain boundaries (paper 000 §4–5, Fig. 5–6; the scene is
+:class:`workbench.scenes.MicroCantilever`, its choices in :mod:`workbench.scenes.fracture`).
+
+Each case (``inter``: ε_L = 0.002 on the grain boundaries; ``intra``: in the grains) runs with
+CSPH under a failure rule — ``compression`` (the default: a failed particle keeps a compressive
+volumetric response) or ``literal`` (stress zero) — both with the visibility criterion of
+:mod:`sph.crack`, and, in the full run, ``compression`` without it (``none``: the pairs never
+change), which shows why the criterion is there. Stored per run: the load–deflection curve at the
+loading patch, the failed fraction per region over time, the energies over time (external work,
+kinetic, elastic, plastic work, released by failure and cracking), and the final particles (for the
+figure of the cracked cantilevers, as Fig. 5 and 6).
+
+There is no reference solution here (the FEM of the same scene comes separately); the gates are
+the checks the physics and the paper's robustness claim allow without one (:func:`gates`). 2-D
+runs are plane strain (csph has no plane stress); ``--quick`` runs the 2-D variant, the full run the
+scene's own dimension (3-D by default), in 3-D with nodal integration (:data:`OPTIONS_3D`).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from workbench import results
+from workbench.scenes.fracture import MicroCantilever
+
+from .common import Gate, check_resolutions
+from .sweep import Task, run_tasks
+
+NAME = "microcantilever"
+SCENE = MicroCantilever
+SOLVERS = ("csph",)
+RESOLUTIONS = {"csph": (5, 10)}
+QUICK_RESOLUTIONS = {"csph": (5,)}
+QUICK_DIM = 2
+"""``--quick``: the 2-D (plane-strain) variant at H/Δx = 5 — two runs of about 8 s each on one
+core."""
+CASES = ("inter", "intra")
+RULES = {"compression": ("compression", "visibility"), "literal": ("literal", "visibility"),
+         "no_crack_rule": ("compression", "none")}
+"""Rule name -> (failure mode of the J2 law, ``crack`` option of csph)."""
+QUICK_RULES = ("compression",)
+GATED_RULES = ("compression", "literal")
+OPTIONS_3D = {"integration": "nodal"}
+"""csph options of 3-D runs. The integration-consistent correction (the default) gives this
+scene's 3-D body (the beam on a deeper, wider block) gradients about five times those of nodal
+integration (median |G| Δx 7.4 against 1.4 at H/Δx = 5) and a highest frequency 40 times higher
+(7.6e11 against 1.8e10 rad/s), so that the explicit step at 0.3 of the CFL estimate is unstable in
+the first steps at any practical factor; nodal integration with the quadratic correction
+(``csph_quad``'s discretisation) runs. Reported as an open problem of the consistent correction
+in 3-D."""
+N_TIME = 301
+ERROR_LABEL = "energy balance error |W_ext - (K + E + W_p + W_rel)| / W_ext, max over time [-]"
+
+# Tolerances, each with its reason.
+# Energy balance (issue 11, gate 2): velocity Verlet's discrete work equals the change of the
+# energies to O(dt²) for smooth motion; a failure is a jump of stress within one step, which costs
+# an error of the order of that particle's stored energy times a few steps' change — 1e-3 of the
+# external work at most in the runs measured; 1 % is the issue's bound.
+TOL_ENERGY = 0.01
+# Where it breaks (gate 3): at least 80 % of the failed particles in the boundaries (inter) or in
+# the grains (intra), the issue's bound.
+MIN_SHARE = 0.8
+# Quasi-static (gate 4): kinetic energy below 1 % of the elastic energy before the first failure,
+# over the second half of the time to it (the first half holds the ramp-up of the load, when both
+# energies are small and their ratio is that of the start-up transient).
+TOL_QUASI_STATIC = 0.01
+# Complete separation, "force back to zero" (issue 11): the mean load over the last 20 % of the run
+# within 5 % of the peak load before the first failure. After separation the broken-off beam,
+# carried by the loading patch, still vibrates: the load oscillates about zero with an amplitude
+# of 10–25 % of that peak; its mean is below 2 % in the runs measured. Reported beside it, not
+# gated: whether the loading patch and the held faces are still in one connected part of the body
+# (sph.csph.CSPH.components: a chain of intact particles that still see each other) — a last
+# ligament of one or two particles may carry a per cent of the load for a while.
+TOL_SEPARATION = 0.05
+TAIL = 0.2
+
+
+def scene_for(scene: MicroCantilever, case: str, rule: str) -> MicroCantilever:
+    """The scene of one case and rule (its name too: the field series of each run its own)."""
+    return dataclasses.replace(scene, case=case, failure=RULES[rule][0],
+                               name=f"{NAME}_{case}_{rule}")
+
+
+def options_for(scene: MicroCantilever, rule: str) -> dict:
+    opts = {"crack": RULES[rule][1]}
+    if scene.dim == 3:
+        opts.update(OPTIONS_3D)
+    return opts
+
+
+def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, quick: bool = False,
+        scheduler: str | None = None, fields=None, field_runs=None) -> xr.Dataset:
+    """Run both cases under each failure rule at each resolution (``quick``: 2-D, the default
+    rule, H/Δx = 5). ``fields`` (a folder): every run writes its particles as a ParaView series
+    there (``field_runs``: only these (solver, resolution) pairs)."""
+    scene = scene or SCENE()
+    solvers = list(solvers or SOLVERS)
+    for s in solvers:
+        if s not in SOLVERS:
+            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
+    if quick:
+        scene = dataclasses.replace(scene, dim=QUICK_DIM)
+    default = (QUICK_RESOLUTIONS if quick else RESOLUTIONS)["csph"]
+    if isinstance(resolutions, dict):
+        resolutions = resolutions.get("csph", default)
+    res = check_resolutions(resolutions or default)
+    for r in res:  # a grain boundary thinner than the spacing is bad input, not a failed run
+        scene.model(scene.H / r)
+    rules = list(QUICK_RULES if quick else RULES)
+    tasks, keys = [], []
+    for case in CASES:
+        for rule in rules:
+            sc = scene_for(scene, case, rule)
+            for r in res:
+                opts = options_for(sc, rule)
+                if fields is not None and (field_runs is None or ("csph", r) in set(field_runs)):
+                    opts["fields"] = str(fields)
+                tasks.append(Task.make("csph", sc, r, **opts))
+                keys.append((case, rule, r))
+    outs = dict(zip(keys, run_tasks(tasks, scheduler, NAME)))
+    ds = dataset(scene, outs, rules, res)
+    if fields is not None:
+        from pathlib import Path
+
+        from workbench.fields import series_name
+
+        written = [f"{series_name(t.scene.name, t.solver, t.resolution)}.pvd" for t in tasks
+                   if t.writes_fields]
+        ds.attrs["field_series"] = ", ".join(n for n in written if (Path(fields) / n).exists())
+    return ds
+
+
+SERIES = {"load": ("load", "N", "force of the loading patch on the beam, downward (N/m in 2-D)"),
+          "deflection": ("deflection_down", "m", "mean downward displacement of the loading patch"),
+          "external_work": ("external_work", "J", "work of the prescribed motion (J/m in 2-D)"),
+          "kinetic_energy": ("kinetic_energy", "J", "kinetic energy"),
+          "elastic_energy": ("strain_energy", "J", "stored (elastic) energy"),
+          "plastic_work": ("plastic_work", "J", "plastic work"),
+          "released_energy": ("released_energy", "J", "stored energy released by failure and cracking")}
+FAILED = {"all": "failed", "grains": "failed_grains", "boundaries": "failed_gb"}
+
+
+def run_summary(out: dict, scene: MicroCantilever) -> dict:
+    """The scalars of one run from its result ``out`` (driver output): peak load before the first
+    failure, deflection and load at the first failure, initial slope, energy balance error,
+    kinetic/elastic ratio before the first failure, failed particles and their share in the grain
+    boundaries, the mean load over the last 20 % of the run, separation, whether a chain of
+    intact particles still joins the loading patch and the held faces (``connected``)."""
+    nan = float("nan")
+    s = dict(peak_load=nan, deflection_at_peak=nan, t_first_failure=nan, load_at_first_failure=nan,
+             deflection_at_first_failure=nan, elastic_slope=nan, energy_balance_error=nan,
+             kinetic_ratio=nan, n_failed=0, share_boundaries=nan, mean_tail_load=nan,
+             tail_load_ratio=nan, separated=False, connected=nan, crack_regions="")
+    if "time" not in out or len(out.get("time", ())) < 3:
+        return s
+    t = np.asarray(out["time"])
+    F = np.asarray(out["load"])
+    d = np.asarray(out["deflection_down"])
+    if not (np.isfinite(F).all() and np.isfinite(d).all()):
+        return s
+    fail = np.asarray(out["failed"])
+    first = np.flatnonzero(fail > 0)
+    before = slice(0, int(first[0]) if first.size else len(t))
+    k = int(np.argmax(F[before]))
+    s.update(peak_load=float(F[k]), deflection_at_peak=float(d[k]))
+    W = np.asarray(out["external_work"])
+    E = (np.asarray(out["kinetic_energy"]) + np.asarray(out["strain_energy"])
+         + np.asarray(out.get("plastic_work", 0 * t)) + np.asarray(out.get("released_energy", 0 * t)))
+    on = W > 1e-6 * np.max(np.abs(W))
+    if on.any():
+        s["energy_balance_error"] = float(np.max(np.abs(W[on] - E[on]) / W[on]))
+    if first.size:
+        i = int(first[0])
+        s.update(t_first_failure=float(t[i]), load_at_first_failure=float(F[i - 1]),
+                 deflection_at_first_failure=float(d[i - 1]))
+        half = (t >= 0.5 * t[i]) & (t < t[i])
+        if half.any():
+            ke, el = np.asarray(out["kinetic_energy"])[half], np.asarray(out["strain_energy"])[half]
+            s["kinetic_ratio"] = float(np.max(ke / el))
+        lin = (d > 0.2 * d[i - 1]) & (d < 0.5 * d[i - 1]) & (t < t[i])
+        if lin.sum() >= 3:
+            s["elastic_slope"] = float(np.polyfit(d[lin], F[lin], 1)[0])
+    mask = np.asarray(out.get("failed_particles", ()), bool)
+    if mask.size:
+        names = list(out["region_names"])
+        reg = np.asarray(out["region"])[mask]
+        gb = np.array([names[r].startswith("gb") for r in reg], bool)
+        s["n_failed"] = int(mask.sum())
+        s["share_boundaries"] = float(gb.mean()) if mask.any() else nan
+        counts = {names[r]: int(c) for r, c in zip(*np.unique(reg, return_counts=True))}
+        s["crack_regions"] = ", ".join(f"{n} {c}" for n, c in sorted(counts.items()))
+    tail = t >= t[-1] - TAIL * scene.t_end
+    s["mean_tail_load"] = float(np.mean(F[tail]))
+    s["tail_load_ratio"] = s["mean_tail_load"] / s["peak_load"]
+    s["separated"] = bool(str(out.get("status")) == "ok" and s["peak_load"] > 0
+                          and abs(s["tail_load_ratio"]) <= TOL_SEPARATION)
+    parts = out.get("component")
+    if parts is not None:
+        parts = np.asarray(parts)
+        sets = out["sets"]
+        s["connected"] = float(bool(set(parts[sets["patch"]]) & set(parts[sets["held"]])))
+    return s
+
+
+def dataset(scene, outs: dict, rules, res) -> xr.Dataset:
+    """The study's dataset from the runs ``outs`` {(case, rule, resolution): driver output}."""
+    time = np.linspace(0.0, scene.t_end, N_TIME)
+    dims = ("solver", "case", "rule", "resolution")
+    shp = (1, len(CASES), len(rules), len(res))
+    series = {n: np.full(shp + (N_TIME,), np.nan) for n in SERIES}
+    failed = np.full(shp + (len(FAILED), N_TIME), np.nan)
+    scal = {}
+    status = np.full(shp, "not run", dtype=object)
+    wall = np.full(shp, np.nan)
+    npart = np.zeros(shp, np.int64)
+    steps = np.zeros(shp, np.int64)
+    pss = np.full(shp, np.nan)
+    finest = {}
+    for (case, rule, r), out in outs.items():
+        idx = (0, CASES.index(case), rules.index(rule), res.index(r))
+        status[idx] = str(out.get("status", "error: no status"))
+        wall[idx] = float(out.get("run_wall_time", out.get("wall_time", np.nan)))
+        npart[idx] = int(out.get("n_particles", 0))
+        steps[idx] = int(out.get("steps", 0))
+        pss[idx] = float(out.get("particle_steps_per_second", np.nan))
+        t = np.asarray(out.get("time", ()))
+        if len(t) > 1:
+            for n, (src, _, _) in SERIES.items():
+                if src in out:
+                    series[n][idx] = np.interp(time, t, np.asarray(out[src], float), right=np.nan)
+            for j, src in enumerate(FAILED.values()):
+                if src in out:
+                    failed[idx + (j,)] = np.interp(time, t, np.asarray(out[src], float), right=np.nan)
+        for k, v in run_summary(out, dataclasses.replace(scene, case=case)).items():
+            scal.setdefault(k, np.full(shp, "" if isinstance(v, str) else np.nan, dtype=object
+                                       if isinstance(v, str) else float))[idx] = v
+        if r == max(res) and "x" in out:
+            finest[(case, rule)] = out
+    data = {n: (dims + ("time",), series[n], {"units": u, "long_name": ln})
+            for n, (_, u, ln) in SERIES.items()}
+    data["failed_fraction"] = (dims + ("part", "time"), failed, {
+        "units": "-", "long_name": "fraction of the particles of the part whose damage reached 1"})
+    data["status"] = (dims, status.astype(str), {"units": "-"})
+    data["wall_time"] = (dims, wall, {"units": "s", "long_name": "run wall time, set-up included"})
+    data["n_particles"] = (dims, npart, {"units": "-"})
+    data["steps"] = (dims, steps, {"units": "-"})
+    data["particle_steps_per_second"] = (dims, pss, {"units": "1/s", "long_name":
+                                                     "particles x steps / time-loop wall time"})
+    units = dict(peak_load="N", deflection_at_peak="m", t_first_failure="s", load_at_first_failure="N",
+                 deflection_at_first_failure="m", elastic_slope="N/m", energy_balance_error="-",
+                 kinetic_ratio="-", n_failed="-", share_boundaries="-", mean_tail_load="N",
+                 tail_load_ratio="-", separated="-", connected="-", crack_regions="-")
+    for k, arr in scal.items():
+        if k == "separated":
+            arr = arr.astype(float)
+        data[k] = (dims, arr.astype(str) if k == "crack_regions" else arr, {"units": units[k]})
+    coords = {"solver": ["csph"], "case": list(CASES), "rule": list(rules),
+              "resolution": ("resolution", np.array(res), {"units": "-", "long_name":
+                                                           "particles across H"}),
+              "time": ("time", time, {"units": "s"}), "part": list(FAILED)}
+    ds = xr.Dataset(data, coords=coords)
+    _final_particles(ds, finest, rules)
+    ds.attrs.update(results.provenance(NAME, scene))
+    ds.attrs["plane"] = "strain" if scene.dim == 2 else "none (3-D)"
+    ds.attrs["rules"] = "; ".join(f"{k}: failure {a}, crack {b}" for k, (a, b) in RULES.items()
+                                  if k in rules)
+    ds.attrs["seeds_um"] = str(np.round(scene.seeds() * 1e6, 3).tolist())
+    return ds
+
+
+def _final_particles(ds: xr.Dataset, finest: dict, rules) -> None:
+    """The final particles of the finest run of each case and rule (padded to the largest count)."""
+    if not finest:
+        return
+    n = max(len(o["x"]) for o in finest.values())
+    d = next(iter(finest.values()))["x"].shape[1]
+    X = np.full((len(CASES), len(rules), n, d), np.nan)
+    x = np.full_like(X, np.nan)
+    grain = np.full((len(CASES), len(rules), n), -1, np.int64)
+    failed = np.zeros((len(CASES), len(rules), n), np.int8)
+    names = None
+    for (case, rule), o in finest.items():
+        i, j = CASES.index(case), rules.index(rule)
+        m = len(o["x"])
+        X[i, j, :m], x[i, j, :m] = o["X"], o["x"]
+        grain[i, j, :m] = o["region"]
+        failed[i, j, :m] = np.asarray(o.get("failed_particles", np.zeros(m)), np.int8)
+        names = o["region_names"]
+    ds["particle_X"] = (("case", "rule", "particle", "axis"), X, {"units": "m", "long_name":
+                        "reference positions, finest resolution (NaN: padding)"})
+    ds["particle_x"] = (("case", "rule", "particle", "axis"), x, {"units": "m", "long_name":
+                        "final positions, finest resolution"})
+    ds["particle_region"] = (("case", "rule", "particle"), grain, {"units": "-", "long_name":
+                             "region index into the attribute region_names (-1: padding)"})
+    ds["particle_failed"] = (("case", "rule", "particle"), failed, {"units": "-"})
+    ds.attrs["region_names"] = ", ".join(names)
+
+
+def _runs(ds, rules=GATED_RULES):
+    for case in ds.case.values:
+        for rule in ds.rule.values:
+            if rule not in rules:
+                continue
+            for r in ds.resolution.values:
+                sel = dict(solver="csph", case=case, rule=rule, resolution=r)
+                if str(ds.status.sel(**sel).values) != "not run":
+                    yield str(case), str(rule), int(r), sel
+
+
+def gates(ds: xr.Dataset) -> list[Gate]:
+    g = []
+    for case, rule, r, sel in _runs(ds):
+        tag = f"microcantilever {case} {rule} H/dx={r}"
+        g.append(Gate.at_most(f"{tag}: energy balance, max over time", float(ds.energy_balance_error.sel(**sel)),
+                              TOL_ENERGY, "issue 11 gate 2: 1 % of the external work"))
+        share = float(ds.share_boundaries.sel(**sel))
+        share = share if case == "inter" else 1.0 - share
+        g.append(Gate.at_most(f"{tag}: failed particles outside the "
+                              f"{'grain boundaries' if case == 'inter' else 'grains'}",
+                              1.0 - share if np.isfinite(share) else np.nan, 1.0 - MIN_SHARE,
+                              "issue 11 gate 3: at least 80 % where the low eps_L is"))
+        g.append(Gate.at_most(f"{tag}: kinetic / elastic energy before the first failure",
+                              float(ds.kinetic_ratio.sel(**sel)), TOL_QUASI_STATIC,
+                              "issue 11 gate 4: quasi-static loading"))
+        sep = "separated" if float(ds.separated.sel(**sel)) == 1.0 else \
+            f"not separated ({ds.status.sel(**sel).values})"
+        g.append(Gate.expect(f"{tag}: complete separation, no NaN, no crash", sep, "separated",
+                             "the paper's robustness claim: the mean load over the last 20 % of "
+                             "the run within 5 % of the peak load before failure"))
+    return g
+
+
+def errors(ds: xr.Dataset) -> list[dict]:
+    """No reference here: the energy balance error of each run against its wall time."""
+    rows = []
+    for case, rule, r, sel in _runs(ds, ("compression",)):
+        e = float(ds.energy_balance_error.sel(**sel))
+        if np.isfinite(e):
+            rows.append(dict(solver=f"csph ({case})", resolution=r, error=e,
+                             wall_time=float(ds.wall_time.sel(**sel))))
+    return rows
+
+
+def report_notes(ds: xr.Dataset) -> list[str]:
+    notes = []
+    for case, rule, r, sel in _runs(ds, tuple(ds.rule.values)):
+        v = {k: ds[k].sel(**sel).values for k in ("peak_load", "t_first_failure", "n_failed",
+                                                   "share_boundaries", "tail_load_ratio", "separated",
+                                                   "connected", "energy_balance_error",
+                                                   "crack_regions")}
+        notes.append(f"{case}, {rule}, H/dx = {r}: peak load before failure "
+                     f"{float(v['peak_load']):.4g} N, first failure at "
+                     f"{float(v['t_first_failure']) * 1e6:.3g} us, {int(v['n_failed'])} failed "
+                     f"particles ({100 * float(v['share_boundaries']):.0f} % in grain boundaries; "
+                     f"{v['crack_regions']}), "
+                     f"{'separated' if float(v['separated']) == 1 else 'not separated'} (mean load "
+                     f"over the last 20 % {100 * float(v['tail_load_ratio']):.2g} % of that peak; "
+                     f"{'a ligament still joins' if float(v['connected']) == 1 else 'nothing joins'} "
+                     f"the patch and the held faces), energy balance error "
+                     f"{float(v['energy_balance_error']):.2e}.")
+    return notes
+
+
+def plot(ds: xr.Dataset, outdir) -> list:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from pathlib import Path
+
+    from .figures import save
+
+    outdir = Path(outdir)
+    figs = []
+    styles = {"compression": "-", "literal": "--", "no_crack_rule": ":"}
+    # load–deflection
+    fig, axes = plt.subplots(1, len(ds.case), figsize=(6 * len(ds.case), 4.2), squeeze=False)
+    for ax, case in zip(axes[0], ds.case.values):
+        for rule in ds.rule.values:
+            for r in ds.resolution.values:
+                sel = dict(solver="csph", case=case, rule=rule, resolution=r)
+                ax.plot(ds.deflection.sel(**sel) * 1e6, ds["load"].sel(**sel), ls=styles.get(str(rule), "-"),
+                        lw=1, label=f"{rule}, H/dx = {int(r)}")
+        ax.set_xlabel("deflection of the loading patch [um]")
+        ax.set_ylabel("load [N/m]" if ds.attrs.get("plane") == "strain" else "load [N]")
+        ax.set_title(f"{case}-granular")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    figs.append(save(fig, outdir / f"{NAME}_load_deflection.png"))
+    # failed fraction per part over time, and energies, of the default rule
+    rule = "compression" if "compression" in ds.rule.values else str(ds.rule.values[0])
+    fig, axes = plt.subplots(2, len(ds.case), figsize=(6 * len(ds.case), 7.5), squeeze=False)
+    for k, case in enumerate(ds.case.values):
+        ax = axes[0, k]
+        for r in ds.resolution.values:
+            for part, ls in zip(ds.part.values, ("-", "--", ":")):
+                ax.plot(ds.time * 1e6, ds.failed_fraction.sel(solver="csph", case=case, rule=rule,
+                                                              resolution=r, part=part),
+                        ls=ls, lw=1, label=f"{part}, H/dx = {int(r)}")
+        ax.set_xlabel("time [us]")
+        ax.set_ylabel("failed fraction [-]")
+        ax.set_title(f"{case}-granular, {rule}")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+        ax = axes[1, k]
+        sel = dict(solver="csph", case=case, rule=rule, resolution=ds.resolution.values[-1])
+        total = 0
+        for n in ("kinetic_energy", "elastic_energy", "plastic_work", "released_energy"):
+            y = ds[n].sel(**sel)
+            total = total + y
+            ax.plot(ds.time * 1e6, y, lw=1, label=n)
+        ax.plot(ds.time * 1e6, ds.external_work.sel(**sel), "k", lw=2, label="external work")
+        ax.plot(ds.time * 1e6, total, "y--", lw=1, label="sum of the four")
+        ax.set_xlabel("time [us]")
+        ax.set_ylabel("energy [J/m]" if ds.attrs.get("plane") == "strain" else "energy [J]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    figs.append(save(fig, outdir / f"{NAME}_failure_energies.png"))
+    if "particle_x" in ds:
+        figs.append(cracked(ds, outdir / f"{NAME}_cracks.png"))
+    return figs
+
+
+def cracked(ds: xr.Dataset, path):
+    """The cracked cantilevers side by side (Fig. 5 and 6 of 000): final particles of the finest
+    run, coloured by grain (the boundaries grey), failed particles red; a 3-D run is shown by its
+    particles within half a spacing of the mid-plane y = 0."""
+    import matplotlib.pyplot as plt
+
+    from .figures import save
+
+    names = ds.attrs["region_names"].split(", ")
+    rules = list(ds.rule.values)
+    fig, axes = plt.subplots(len(rules), len(ds.case), figsize=(6 * len(ds.case), 2.6 * len(rules)),
+                             squeeze=False)
+    palette = np.array(["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown",
+                        "tab:pink", "tab:olive", "tab:cyan"])
+    for i, case in enumerate(ds.case.values):
+        for j, rule in enumerate(rules):
+            ax = axes[j, i]
+            X = ds.particle_X.sel(case=case, rule=rule).values
+            x = ds.particle_x.sel(case=case, rule=rule).values
+            reg = ds.particle_region.sel(case=case, rule=rule).values
+            bad = ds.particle_failed.sel(case=case, rule=rule).values.astype(bool)
+            ok = reg >= 0
+            if X.shape[1] == 3:
+                dx = float(ds.attrs["param_H"]) / int(ds.resolution.values[-1])
+                ok &= np.abs(X[:, 1]) <= 0.5 * dx
+            up = X.shape[1] - 1
+            col = np.array(["tab:gray" if names[r].startswith("gb") else
+                            palette[int(names[r][5:]) % len(palette)] if r >= 0 else "w" for r in reg])
+            lo = np.nanmin(X[ok], axis=0)
+            hi = np.nanmax(X[ok], axis=0)
+            m = ok & ~bad
+            ax.scatter(x[m, 0] * 1e6, x[m, up] * 1e6, c=col[m], s=6)
+            ax.scatter(x[ok & bad, 0] * 1e6, x[ok & bad, up] * 1e6, c="red", s=8)
+            ax.set_xlim((lo[0] - 1e-6) * 1e6, (hi[0] + 2e-6) * 1e6)
+            ax.set_ylim((lo[up] - 1e-6) * 1e6, (hi[up] + 1e-6) * 1e6)
+            ax.set_aspect("equal")
+            ax.set_title(f"{case}-granular, {rule}", fontsize=9)
+            ax.set_xlabel("x [um]")
+    return save(fig, path)
