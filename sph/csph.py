@@ -54,16 +54,11 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland
                hourglass="hourglass-control coefficient α ≥ 0 (default 0)",
                gradient="'kernel' (default: the corrected kernel gradient) | 'wls' (HPM's "
                         "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
-<<<<<<< HEAD
-               re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)")
-INTEGRATIONS = ("auto", "consistent", "nodal")
-=======
                re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)",
                crack="'visibility' (default: an intact particle stops seeing failed particles and "
                      "what lies behind them, sph.crack) | 'none' (the pairs never change)")
 CRACKS = ("visibility", "none")
-INTEGRATIONS = ("consistent", "nodal")
->>>>>>> b749945
+INTEGRATIONS = ("auto", "consistent", "nodal")
 GRADIENTS = ("kernel", "wls")
 
 DEFAULT_CORRECTION = "quadratic"
@@ -176,14 +171,9 @@ class CSPH(ParticleBody):
     impulse_in_loop = True
 
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
-<<<<<<< HEAD
                  correction: str = DEFAULT_CORRECTION, integration: str = "auto",
-                 hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None):
-=======
-                 correction: str = DEFAULT_CORRECTION, integration: str = "consistent",
                  hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None,
                  crack: str = "visibility"):
->>>>>>> b749945
         super().__init__(particles)
         if crack not in CRACKS:
             raise ValueError(f"crack: {crack!r} is not one of {', '.join(map(repr, CRACKS))}")
@@ -259,17 +249,13 @@ class CSPH(ParticleBody):
 
         b = self.tl
         F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
-<<<<<<< HEAD
-        e = strain_energy(F, self.disc.V, b.prm, b.mat_id, history=b.history)
-=======
         if b.history.shape[1] > 0:
             from workbench.materials.kernels import stored_energies
 
             V = self.disc.V  # particles without volume (sph.crack) carry no energy, whatever F
             e = float(V[V > 0] @ stored_energies(F, b.history, b.prm, b.mat_id)[V > 0])
         else:
-            e = strain_energy(F, self.disc.V, b.prm, b.mat_id)
->>>>>>> b749945
+            e = strain_energy(F, self.disc.V, b.prm, b.mat_id, history=b.history)
         if b.K_hg is not None:
             e += 0.5 * float(np.sum(self.x * (b.K_hg @ self.x)))
         return e
