@@ -91,7 +91,7 @@ from numba import njit, prange
 from scipy.sparse.csgraph import connected_components
 
 from .kernels import JIT, KERNELS, w as kernel_value
-from .neighbours import reverse_pairs
+from .neighbours import reverse_pairs, sorted_position
 
 BASES = ("linear", "quadratic")
 WEIGHTS = ("uniform", "kernel", "wls")
@@ -481,17 +481,6 @@ def _two_ring(indptr, indices, count_only, kptr, kind):
     return counts
 
 
-@njit(inline="always", **JIT)
-def _find(kind, lo, hi, e):
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if kind[mid] < e:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
 @njit(parallel=True, **JIT)
 def _assemble(indptr, indices, rev, V2, omega, Pb, C, sig, kap, kptr, kind, data):
     """K of eq. C3 into the CSR pattern (kptr, kind), row c owned by one thread:
@@ -505,16 +494,16 @@ def _assemble(indptr, indices, rev, V2, omega, Pb, C, sig, kap, kptr, kind, data
         for i in range(lo, hi):
             data[i] = 0.0
         if V2[c] != 0.0:
-            data[_find(kind, lo, hi, c)] += V2[c] * kap[c]
+            data[sorted_position(kind, lo, hi, c)] += V2[c] * kap[c]
             for pt in range(indptr[c], indptr[c + 1]):
-                data[_find(kind, lo, hi, indices[pt])] -= V2[c] * sig[pt]
+                data[sorted_position(kind, lo, hi, indices[pt])] -= V2[c] * sig[pt]
         for pc in range(indptr[c], indptr[c + 1]):
             a = indices[pc]
             if V2[a] == 0.0:
                 continue
             ps = rev[pc]  # the pair (a, c) in a's row
             va = V2[a]
-            data[_find(kind, lo, hi, a)] -= va * sig[ps]
+            data[sorted_position(kind, lo, hi, a)] -= va * sig[ps]
             ws = omega[ps]
             for pt in range(indptr[a], indptr[a + 1]):
                 t = 0.0
@@ -523,7 +512,7 @@ def _assemble(indptr, indices, rev, V2, omega, Pb, C, sig, kap, kptr, kind, data
                 v = -ws * t
                 if pt == ps:
                     v += ws
-                data[_find(kind, lo, hi, indices[pt])] += va * v
+                data[sorted_position(kind, lo, hi, indices[pt])] += va * v
 
 
 @njit(parallel=True, **JIT)

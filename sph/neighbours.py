@@ -158,6 +158,19 @@ def drop_cross_body(indptr: np.ndarray, indices: np.ndarray, body: np.ndarray):
     return new_ptr, np.ascontiguousarray(indices[keep])
 
 
+@njit(inline="always", **JIT)
+def sorted_position(keys, lo, hi, e):
+    """The first index in keys[lo:hi] (sorted ascending) whose key is not below e (binary search):
+    where e sits in a sorted CSR row."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if keys[mid] < e:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 @njit(parallel=True, **JIT)
 def reverse_pairs(indptr, indices):
     """rev[p] for the pair p = (a, b) of a's row: the index of (b, a) in b's sorted row (binary
@@ -167,13 +180,5 @@ def reverse_pairs(indptr, indices):
     for a in prange(N):
         for p in range(indptr[a], indptr[a + 1]):
             b = indices[p]
-            lo = indptr[b]
-            hi = indptr[b + 1]
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if indices[mid] < a:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            rev[p] = lo
+            rev[p] = sorted_position(indices, indptr[b], indptr[b + 1], a)
     return rev

@@ -37,6 +37,7 @@ from workbench.materials.kernels import material_point, material_points, svk_poi
 
 from .integrate import kick_drift_row, kick_row
 from .kernels import JIT, N_CHUNKS
+from .neighbours import sorted_position
 
 FASTMATH = {"contract", "arcp"}
 """LLVM flags of the time loop: fused multiply–add and reciprocal multiplication only (no
@@ -317,17 +318,6 @@ def _tangent_pattern(indptr, indices):
 
 
 @njit(**JIT)
-def _find(bcol, lo, hi, e):
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if bcol[mid] < e:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@njit(**JIT)
 def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, vals):
     """K_(c k),(e l) += V_a Σ_jm g_ac,j A_a[k,j,l,m] g_ae,m for every stencil a ∪ nbrs(a), with
     g_ab = G_ab, g_aa = −Σ_b G_ab (∂F_a/∂x_c = I ⊗ g_ac), written straight into the CSR values of
@@ -370,7 +360,7 @@ def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, vals):
             row_len = (bptr[c + 1] - bptr[c]) * d
             for t in range(n):
                 e = ids[t]
-                pos = _find(bcol, bptr[c], bptr[c + 1], e) - bptr[c]
+                pos = sorted_position(bcol, bptr[c], bptr[c + 1], e) - bptr[c]
                 for k in range(d):
                     base = bptr[c] * d * d + k * row_len + pos * d
                     for l in range(d):
