@@ -16,7 +16,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .kernels import kernel_code
+from numba import njit, prange
+
+from .kernels import JIT, kernel_code
 
 
 def hourglass_operator(disc) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -64,10 +66,12 @@ def hourglass_stiffness(disc, alpha: float, mu: float) -> sp.csr_matrix:
     """K_s (N × N) of the hourglass energy Π_hg = ½ α μ Σ_a V_a Σ_b c_ab |δ_ab|² = ½ Σ_k x_kᵀ K_s x_k
     (a quadratic form of each coordinate column, so its force −K_s x is exact and constant-
     stiffness; Π_hg is invariant under rigid motions, so momentum and angular momentum stay
-    conserved). ``alpha`` dimensionless (0 switches it off), ``mu`` the shear modulus, Pa."""
+    conserved). ``alpha`` dimensionless (0 switches it off), ``mu`` the shear modulus, Pa: one
+    value, or (N,) the modulus of each particle a (the weight of its row)."""
     D, c = hourglass_operator(disc)
     a_of = np.repeat(np.arange(disc.n), np.diff(disc.indptr))
-    wts = alpha * mu * disc.V[a_of] * c
+    mu = np.asarray(mu, dtype=np.float64)
+    wts = alpha * (mu[a_of] if mu.ndim else mu) * disc.V[a_of] * c
     K = (D.T @ sp.diags(wts) @ D).tocsr()
     K.sum_duplicates()
     return K
@@ -81,3 +85,115 @@ def hourglass_strain(disc, x: np.ndarray, D=None, c=None) -> float:
     a_of = np.repeat(np.arange(disc.n), np.diff(disc.indptr))
     delta = D @ x
     return float(np.sqrt(np.sum(disc.V[a_of] * c * np.sum(delta * delta, axis=1)) / disc.V.sum()))
+
+
+# ================================================================================================
+# The energy in the zero-energy modes: the kinetic energy of the non-affine part of the motion
+# ================================================================================================
+#
+# A zero-energy mode is, by definition, a motion the method's stored energy does not see; its
+# energy therefore cannot be read from the method's own strain energy (for the unstabilised method
+# it is zero there) and shows as kinetic energy of a motion that no local affine velocity field
+# represents. We measure it, the same way for every method (independent of the method's own
+# gradient, so that csph and hpm are compared on one footing), by a local orthogonal projection:
+# around each particle a, over its reference neighbours b (HPM's weight w_ab = 1 − |X_ab|²/r_e²,
+# r_e = 2.1Δx, and w_aa = 1 for a itself), the weighted least-squares fit of the velocities by an
+# affine field of the *current* positions, v_b ≈ c_a + L_a (x_b − x_a). The fit is an orthogonal
+# projection in the inner product Σ_b w_ab (·)·(·), so the local kinetic energy splits exactly
+# (Pythagoras) into the affine part and the residual r_ab = v_b − c_a − L_a (x_b − x_a):
+#
+#     K_loc = Σ_a ½ m_a Σ_b ŵ_ab |v_b|²  =  K_aff + K_hg,   K_hg = Σ_a ½ m_a Σ_b ŵ_ab |r_ab|²,
+#     ŵ_ab = w_ab / Σ_b w_ab,
+#
+# and K_hg/K_loc ∈ [0, 1]. A translation, a rigid rotation and any uniform strain rate give
+# K_hg = 0 exactly; a smooth field of wavelength λ gives K_hg/K_loc = O((Δx/λ)⁴) (the residual is
+# the curvature term, O((Δx/λ)²) in amplitude); a particle-scale zig-zag gives K_hg/K_loc = O(1).
+# Physical waves at the particle scale count as well: none is resolved there.
+
+@njit(parallel=True, **JIT)
+def _nonaffine_rows(x, v, m, indptr, indices, w, hg, loc):
+    """Per particle a: hg[a] = ½ m_a Σ_b ŵ_ab |r_ab|², loc[a] = ½ m_a Σ_b ŵ_ab |v_b|² (b over a and
+    its CSR neighbours, ŵ normalised, the fit of the module comment), J (J/m in 2-D)."""
+    N, d = x.shape
+    nb = d + 1
+    for a in prange(N):
+        A = np.zeros((nb, nb))
+        B = np.zeros((nb, d))
+        phi = np.zeros(nb)
+        wsum = 1.0
+        vv = 0.0
+        # a itself (w_aa = 1, φ = (1, 0))
+        A[0, 0] += 1.0
+        for k in range(d):
+            B[0, k] += v[a, k]
+            vv += v[a, k] * v[a, k]
+        for p in range(indptr[a], indptr[a + 1]):
+            b = indices[p]
+            wb = w[p]
+            if wb <= 0.0:
+                continue
+            phi[0] = 1.0
+            for k in range(d):
+                phi[k + 1] = x[b, k] - x[a, k]
+            for r in range(nb):
+                for s in range(nb):
+                    A[r, s] += wb * phi[r] * phi[s]
+                for k in range(d):
+                    B[r, k] += wb * phi[r] * v[b, k]
+            wsum += wb
+            for k in range(d):
+                vv += wb * v[b, k] * v[b, k]
+        coef = np.linalg.pinv(A) @ B  # (d+1, d): c_a and L_aᵀ
+        res = 0.0
+        for k in range(d):
+            e = v[a, k] - coef[0, k]
+            res += e * e
+        for p in range(indptr[a], indptr[a + 1]):
+            b = indices[p]
+            wb = w[p]
+            if wb <= 0.0:
+                continue
+            for k in range(d):
+                e = v[b, k] - coef[0, k]
+                for l in range(d):
+                    e -= coef[l + 1, k] * (x[b, l] - x[a, l])
+                res += wb * e * e
+        hg[a] = 0.5 * m[a] * res / wsum
+        loc[a] = 0.5 * m[a] * vv / wsum
+
+
+class NonAffineEnergy:
+    """K_hg and K_loc of the comment above for particles with reference positions X (N, d), m,
+    spacing dx, m; ``re_ratio`` r_e/Δx of the weights (HPM's 2.1 by default); ``body`` (N,) labels
+    (no weights across bodies). Call with current positions x (N, d), m, velocities v (N, d), m/s,
+    and masses m (N,), kg: returns (K_hg, K_loc), J (J/m in 2-D)."""
+
+    def __init__(self, X, dx: float, re_ratio: float = 2.1, body=None):
+        from .neighbours import drop_cross_body, neighbour_list
+
+        if not (dx > 0 and 1.0 < re_ratio <= 6.0):
+            raise ValueError(f"re_ratio: {re_ratio!r} is not allowed; r_e/Δx must lie in (1, 6] "
+                             "(and dx > 0)")
+        X = np.ascontiguousarray(X, dtype=np.float64)
+        re = re_ratio * dx
+        indptr, indices = neighbour_list(X, re)
+        if body is not None:
+            indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+        rows = np.repeat(np.arange(len(X)), np.diff(indptr))
+        r2 = np.sum((X[indices] - X[rows]) ** 2, axis=1)
+        self.indptr, self.indices = indptr, indices
+        self.w = np.ascontiguousarray(np.maximum(1.0 - r2 / (re * re), 0.0))
+
+    def per_particle(self, x, v, m) -> tuple[np.ndarray, np.ndarray]:
+        """(hg, loc), each (N,), J: the particles' shares of K_hg and K_loc."""
+        N = len(x)
+        hg, loc = np.zeros(N), np.zeros(N)
+        _nonaffine_rows(np.ascontiguousarray(x, dtype=np.float64),
+                        np.ascontiguousarray(v, dtype=np.float64),
+                        np.ascontiguousarray(m, dtype=np.float64), self.indptr, self.indices,
+                        self.w, hg, loc)
+        return hg, loc
+
+    def __call__(self, x, v, m) -> tuple[float, float]:
+        hg, loc = self.per_particle(x, v, m)
+        return float(hg.sum()), float(loc.sum())

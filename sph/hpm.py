@@ -34,9 +34,25 @@ potential that penalises the particle motion the affine map F_i does not see): w
 with α = ``stabilisation`` (0: off) and G_i the small-strain shear modulus of particle i's material.
 Because F_i minimises Σ_j w_ij |x_ij − F X_ij|² (that is eq. 4), ∂H_s/∂F_i = 0 and the force is
 simply f_i += 2 Σ_j w_ij [c_i (x_ij − F_i X_ij) + c_j (x_ij − F_j X_ij)], antisymmetric,
-conservative and objective: energy and both momenta stay conserved. (The exact normalisation of
-Kondo et al. was not available here; this is our formulation of the same idea, stated so it can be
-checked.)
+conservative and objective: energy and both momenta stay conserved. This is
+``stabilisation_form="energy"`` (the default).
+
+``stabilisation_form="kondo"``: the per-bond ("spring") normalisation that we read in Kondo, Suzuki
+& Koshizuka (2010): each bond's non-affine stretch is measured against its own length and the
+bonds of a particle are averaged with normalised weights,
+
+    H_K = ½ α Σ_i G_i V_i Σ_j ŵ_ij |x_ij − F_i X_ij|² / |X_ij|²,  ŵ_ij = V_j w_ij / Σ_k V_k w_ik
+    (:func:`kondo_stiffness`),
+
+i.e. the hourglass energy of :mod:`sph.hourglass` on HPM's weights and gradient. Unlike H_s, the
+bond weights ŵ_ij/|X_ij|² are not the least-squares weights of eq. 4, so ∂H_K/∂F_i ≠ 0; H_K is a
+quadratic form ½ Σ_k x_kᵀ K x_k of the positions (F_i is linear in x), and its exact force −K x
+(through F_i included) keeps energy and both momenta conserved. The paper's own text was not
+available here (only its bibliographic record and 004's one-line description): the per-bond
+normalisation by |X_ij|², the normalised weights, the ½ and the shear modulus as the scale are
+our reading, not a transcription; G_i and α play the role of the paper's stiffness coefficient.
+On a uniform lattice, with ŵ_ij/|X_ij|² ≈ w_ij/Σ_k w_ik|X_ik|² and ½ against 1, H_K ≈ ½ H_s at
+the same α for the nearest bonds; bonds shorter or longer than the mean weigh more or less.
 
 Time integration (:func:`advance`): the symplectic scheme of eq. 8 (x^{n+1} = x^n + Δt v^n,
 v^{n+1} = v^n + Δt a^{n+1}). Its positions are those of the leapfrog; we run it in the
@@ -500,6 +516,20 @@ class Model:
         return self.table.n_history
 
 
+STABILISATION_FORMS = ("energy", "kondo")
+
+
+def kondo_stiffness(model: "Model", alpha: float) -> "sp.csr_matrix":
+    """K (N × N) of H_K = ½ α Σ_i G_i V_i Σ_j ŵ_ij |x_ij − F_i X_ij|²/|X_ij|² (module docstring,
+    ``stabilisation_form="kondo"``) = ½ Σ_k x_kᵀ K x_k, each coordinate column k; the shared
+    hourglass operator of :func:`sph.hourglass.hourglass_stiffness` on HPM's weight (eq. 6) and
+    gradient (eq. 4), with each particle's own shear modulus G_i, Pa. ``alpha`` dimensionless."""
+    from .hourglass import hourglass_stiffness
+
+    mu = np.array([mt.mu for mt in model.table.materials])[model.mat_id]
+    return hourglass_stiffness(wls_discretisation(model), alpha, mu)
+
+
 def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
                 body=None, mat_id=None) -> Model:
     """Reference configuration of an HPM body (eq. 5–6): X (N, d) m, d = 2 or 3; V (N,) volumes;
@@ -665,6 +695,8 @@ def wls_discretisation(model: Model):
 NAME = "hpm"
 OPTIONS = dict(re_ratio=f"r_e/Δx (default {RE_RATIO})",
                stabilisation="zero-energy-mode stabilisation α in [0, 10] (default 0)",
+               stabilisation_form="'energy' (default: H_s, normalised by the neighbourhood) | "
+                                  "'kondo' (per-bond normalisation, our reading of Kondo et al. 2010)",
                scheme="'verlet' (default) | 'euler' (eq. 8 literally)")
 
 
@@ -675,7 +707,7 @@ class HPM(ParticleBody):
     name = NAME
 
     def __init__(self, particles, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
-                 scheme: str = "verlet"):
+                 scheme: str = "verlet", stabilisation_form: str = "energy"):
         super().__init__(particles)
         ps = particles
         if ps.plane == "stress":
@@ -683,17 +715,30 @@ class HPM(ParticleBody):
                              "allowed: 'strain' or a 3-D model")
         if scheme not in ("verlet", "euler"):
             raise ValueError(f"scheme: {scheme!r} is not one of 'verlet', 'euler'")
+        if stabilisation_form not in STABILISATION_FORMS:
+            raise ValueError(f"stabilisation_form: {stabilisation_form!r} is not one of "
+                             f"{', '.join(map(repr, STABILISATION_FORMS))}")
         self.scheme = scheme
         self.stabilisation = float(stabilisation)
-        self.model = build_model(ps.X, ps.V, ps.table, ps.dx, re_ratio, stabilisation,
+        self.stabilisation_form = stabilisation_form
+        kondo = stabilisation_form == "kondo"
+        self.model = build_model(ps.X, ps.V, ps.table, ps.dx, re_ratio,
+                                 0.0 if kondo else stabilisation,
                                  body=ps.body if len(ps.body_names) > 1 else None,
                                  mat_id=ps.mat_id)
+        self.K_kondo = (kondo_stiffness(self.model, self.stabilisation)
+                        if kondo and self.stabilisation > 0 else None)
         self.m = self.model.m
         self.st = init(self.model)
+        if self.K_kondo is not None:
+            self.st.acc -= (self.K_kondo @ self.st.x) / self.m[:, None]
         self.x, self.v, self.acc = self.st.x, self.st.v, self.st.acc
 
     def internal_force(self, x):
-        return forces(self.model, x, self.st)
+        f = forces(self.model, x, self.st)
+        if self.K_kondo is not None:
+            f -= self.K_kondo @ x
+        return f
 
     def commit(self) -> None:
         if self.model.n_history:
@@ -703,7 +748,8 @@ class HPM(ParticleBody):
         return bool(self.st.status.any())
 
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
-        if extra is not None:
+        if extra is not None or self.K_kondo is not None:
+            # the generic velocity Verlet: the Kondo force −K x is not in the fused loop
             return super().advance(n, dt, f_ext, fixed, v_fix, damping, extra)
         self.st.t, self.st.steps = self.t, self.steps
         done = advance(self.model, self.st, dt, n, fixed=fixed, v_fix=v_fix,
@@ -712,7 +758,10 @@ class HPM(ParticleBody):
         return done
 
     def stored_energy(self) -> float:
-        return potential_energy(self.model, self.x)
+        e = potential_energy(self.model, self.x)
+        if self.K_kondo is not None:
+            e += 0.5 * float(np.sum(self.x * (self.K_kondo @ self.x)))
+        return e
 
     def gradient_form(self):
         from .total_lagrangian import Body
