@@ -10,7 +10,8 @@
    one, prescribed motion moves DOFs; tractions, pressures, point and body forces become dead
    particle forces f_ext (a particle's share of a surface load is its boundary area on that surface);
 4. **drive** — :class:`~workbench.scenes.model.Static`: Newton on the gradient form with load
-   stepping (:mod:`sph.static`); :class:`~workbench.scenes.model.Modal`: the eigenproblem
+   stepping (:mod:`sph.static`), or, for a method without one (classic SPH), dynamic relaxation
+   through its own explicit step (:mod:`sph.relaxation`); :class:`~workbench.scenes.model.Modal`: the eigenproblem
    K φ = ω² M φ of the same tangent about X with lumped masses; :class:`~workbench.scenes.model.Explicit`:
    the method's fused time loop in chunks (contact: the generic velocity Verlet with the method's
    force plus :mod:`sph.contact`), loads that vary in time updated at chunk midpoints (chunks of at
@@ -278,10 +279,7 @@ class Run:
     def static(self, fields, snap_name, t0, method: str = "newton") -> dict:
         from .static import Constraints, solve_path
 
-        tlb = self.body.gradient_form()
-        if tlb is None:
-            raise ValueError(f"drive: {self.body.name} has no static solver (a static scene needs "
-                             "a gradient-form method: csph or hpm)")
+        tlb = self.body.gradient_form()  # None: dynamic relaxation by the method's own step
         drive = self.model.drive
         path = np.asarray(drive.path, dtype=float)
         names = [o.name for o in self.model.observables]
@@ -296,9 +294,10 @@ class Run:
         def constraints_at(lam):
             return Constraints(self.fixed, self.dead_forces(lam)), self.prescribed_targets(lam)
 
-        def on_equilibrium(k, lam, x, its):
+        def on_equilibrium(k, lam, x, its, f=None):
             self.body.x[:] = x
-            f = tlb.evaluate(x) + self.dead_forces(lam)
+            if f is None:
+                f = tlb.evaluate(x) + self.dead_forces(lam)
             st = self.body.field_state()
             for n, v in self.observe(x, f, st).items():
                 out[n][k] = v
@@ -308,8 +307,13 @@ class Run:
                 state["lam"] = lam
                 snap(k + 1)
 
-        out["status"] = solve_path(tlb, self.ps.X.copy(), path, constraints_at, on_equilibrium,
-                                   method=method)
+        if tlb is None:
+            from .relaxation import relax_path
+
+            out["status"] = relax_path(self.body, path, constraints_at, on_equilibrium)
+        else:
+            out["status"] = solve_path(tlb, self.ps.X.copy(), path, constraints_at,
+                                       on_equilibrium, method=method)
         return out
 
     # -- modal ---------------------------------------------------------------------------------

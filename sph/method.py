@@ -14,7 +14,8 @@ another back end (a GPU) can implement the same step over the same state. What a
 - :meth:`ParticleBody.energies` — kinetic and stored energy;
 - :meth:`ParticleBody.gradient_form` — for methods whose F is Σ_b (x_b − x_a) ⊗ G_ab and whose
   force is −∂Π/∂x (csph, hpm): the :class:`sph.total_lagrangian.Body` on which the static Newton
-  and the modal solve work; None otherwise (classic SPH: no static solver);
+  and the modal solve work; None otherwise (classic SPH: the static drive then relaxes the body
+  dynamically through :meth:`advance`, :mod:`sph.relaxation`);
 - :meth:`ParticleBody.field_state` — the state a field snapshot writes.
 
 Adding a method: one module implementing this, and one line in :data:`sph.METHODS`.

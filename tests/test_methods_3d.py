@@ -5,8 +5,8 @@ penalty contact (sph.contact) between 3-D bodies.
 References, each independent of the code under test: affine maps (F exact), central finite
 differences of the discrete Hamiltonian, the antisymmetry of pair forces (momenta), velocity
 Verlet applied mode by mode to the linearised system (energy error), the SPH sums of 003 eq. 1–3
-written out in numpy over a k-d tree, the series-spring reaction of a two-material bar, Timoshenko
-beam theory, and the energy of a collision.
+written out in numpy over a k-d tree, the series-spring reaction of a two-material bar, and the
+energy of a collision. (HPM and classic SPH on the 3-D cantilever: tests/test_scene_methods.py.)
 """
 import math
 from types import SimpleNamespace
@@ -20,7 +20,7 @@ from sph import classic, driver, hpm, particles, total_lagrangian
 from sph.contact import contact_forces
 from sph.diagnostics import angular_momentum, linear_momentum
 from workbench.materials import RING_RUBBER, RUBBER, Material, MaterialTable
-from workbench.scenes.verification import BiMaterialBar, Cantilever3D
+from workbench.scenes.verification import BiMaterialBar
 
 # Σ f = 0, Σ x × f = 0 and F of an affine map hold by construction: round-off only, relative to
 # the largest force (times N for sums over N particles) or to |F|.
@@ -201,53 +201,6 @@ def test_hpm_two_material_bar_series_spring(dim):
     tol = 0.5 * dx * abs(1 / M1 - 1 / M2) / compliance
     err = out["reaction"][0] / sc.exact_reaction() - 1
     assert abs(err) < tol, f"reaction error {err:.3%}, allowed {tol:.3%}"
-
-
-def pure_bending_energy_error(sc: Cantilever3D, res: int) -> float:
-    """Relative error of HPM's stored energy for the exact 3-D pure-bending field of the beam
-    (u = (−κxz, νκyz, κ(x² + ν(z² − y²))/2), σ_xx = −Eκz the only stress; energy ½ E I κ² L),
-    on the beam's particles at H/Δx = res: the bending-stiffness error of the discretisation
-    (WLS gradient at the free faces, trapezoid volumes)."""
-    dx = sc.H / res
-    X, V = particles.box((0, -sc.B / 2, -sc.H / 2), (sc.L, sc.B / 2, sc.H / 2), dx, "node")
-    k, nu = 1e-4, sc.nu
-    x, y, z = X.T
-    u = np.stack([-k * x * z, nu * k * y * z, 0.5 * k * (x ** 2 + nu * (z ** 2 - y ** 2))], 1)
-    e = hpm.potential_energy(hpm.build_model(X, V, sc.material, dx), X + u)
-    return e / (0.5 * sc.E * k ** 2 * sc.I * sc.L) - 1
-
-
-def test_hpm_cantilever3d_against_timoshenko():
-    """Cantilever3D (L/H = 8) through the driver at H/Δx = 2 and 4, static Newton, against
-    δ_T = P L³/(3EI) + P L/(κGA).
-
-    HPM's error here is that of its bending stiffness, O(Δx²): the WLS gradient is first order
-    in a layer of width ~r_e at the free faces and the trapezoid volumes over-integrate z² by
-    2(Δx/H)², both second order in the energy. Hence:
-
-    - the observed order log₂(e₂/e₄) lies in [1.5, 2.5];
-    - the Richardson value (4δ₄ − δ₂)/3 removes the Δx² term and must meet δ_T within the beam
-      theory's own error for this 3-D body, 2 % (shear is 1.2 % of δ_T, so Cowper's κ and the
-      clamp's warping restraint are a fraction of that); an uncancelled discretisation error
-      (a wrong limit, another order) fails it;
-    - the error at H/Δx = 4 is below twice the compliance error 1/(1 + e_b) − 1 of the exact
-      pure-bending field at that spacing (:func:`pure_bending_energy_error`, ≈ 10 %): the free
-      faces along the span, and at most as much again at the root, where the same face error
-      meets the held layers."""
-    sc = Cantilever3D()
-    delta_T = sc.timoshenko(sc.loads[0])
-    err = {}
-    for res in (2, 4):
-        out = driver.solve("hpm", sc, res)
-        assert out["status"] == ["ok"], out["status"]
-        err[res] = out["tip_deflection"][0] / delta_T - 1
-    richardson = (4 * err[4] - err[2]) / 3
-    assert abs(richardson) < 0.02, (
-        f"Richardson error {richardson:.3%} (e2 {err[2]:.3%}, e4 {err[4]:.3%})")
-    order = math.log2(err[2] / err[4])
-    assert 1.5 < order < 2.5, f"observed order {order:.2f}"
-    e_b = pure_bending_energy_error(sc, 4)
-    assert 0 < err[4] < 2 * (1 / (1 + e_b) - 1), f"e4 {err[4]:.3%}, bending energy error {e_b:.3%}"
 
 
 def test_hpm_plane_strain_specialisation_equals_generic_kernel():
