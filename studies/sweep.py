@@ -251,8 +251,9 @@ def check_scheduler(scheduler: str | None, timeout: float = SCHEDULER_TIMEOUT) -
     from workbench.scenes import ParameterError
 
     allowed = "allowed: serial, local, or the address of a running dask scheduler (tcp://HOST:PORT)"
-    if scheduler in (None, "serial", "local"):
-        return scheduler or default_scheduler()
+    scheduler = scheduler or default_scheduler()  # WORKBENCH_SCHEDULER is checked the same way
+    if scheduler in ("serial", "local"):
+        return scheduler
     if not isinstance(scheduler, str) or not scheduler.strip():
         raise ParameterError(f"scheduler: {scheduler!r} is not allowed; {allowed}")
     text = scheduler if "://" in scheduler else f"tcp://{scheduler}"

@@ -226,6 +226,10 @@ def cmd_bench(args) -> int:
     from studies import bench
 
     try:
+        results.check_writable(args.out)
+    except results.OutputError as err:
+        raise UsageError(f"--out: {err}") from None
+    try:
         return bench.main(args)
     except bench.UsageError as err:
         raise UsageError(str(err)) from None
