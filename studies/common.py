@@ -52,7 +52,7 @@ def run_solver(name: str, scene, resolution: int, **options) -> dict:
     and a ``status`` (``ok``, ``unstable: …``, ``diverged``, ``error: …``)."""
     t0 = time.perf_counter()
     try:
-        check_memory(name, scene, resolution)  # refused before it allocates anything
+        _check_memory_of_run(name, scene, resolution)  # refused before it allocates anything
         out = dict(solver_function(name)(scene, resolution, **options))
     except Exception as err:  # a failed run is a result
         log.debug("%s", traceback.format_exc())
@@ -64,6 +64,21 @@ def run_solver(name: str, scene, resolution: int, **options) -> dict:
     status = summary_status(out["status"])
     log.info("run %-10s %-6s resolution=%-4s %7.2f s  %s", scene.name, name, resolution, wall, status)
     return out
+
+
+def _check_memory_of_run(name: str, scene, resolution) -> None:
+    """:func:`check_memory` where the scene has a model and the estimate can be made (a run the
+    estimate cannot judge is left to the solver)."""
+    from workbench.scenes import ParameterError
+
+    if not hasattr(scene, "model") or not isinstance(resolution, numbers.Integral):
+        return
+    try:
+        check_memory(name, scene, int(resolution))
+    except ParameterError:
+        raise
+    except Exception:  # pragma: no cover - no estimate: no refusal
+        log.debug("no memory estimate for %s %s", name, getattr(scene, "name", scene))
 
 
 def summary_status(status) -> str:
@@ -240,7 +255,7 @@ def check_memory(solver: str, scene, resolution: int, available: int | None = No
     have = machine_memory() if available is None else available
     if need <= have:
         return
-    dim = 3 if per in (BYTES_PER_POINT[3]["fem"], BYTES_PER_POINT[3]["particle"]) else 2
+    dim = estimate_points(scene, 1, solver)[1]
     r_max = int(resolution * (have / need) ** (1.0 / dim))
     while r_max > 1 and estimate_bytes(solver, scene, r_max)[0] > have:
         r_max -= max(1, r_max // 50)

@@ -144,6 +144,7 @@ def execute(task: Task) -> dict:
 
 
 def _single_thread_numba():
+    os.environ["WORKBENCH_PROGRESS"] = "0"  # a worker's runs draw no bars on the user's terminal
     try:
         import numba
 

@@ -148,7 +148,7 @@ def test_interrupted_sweep_resumes_from_the_cache(fake_solver):
 def test_killed_sweep_resumes_from_the_cache(fake_solver, tmp_path):
     script = textwrap.dedent(f"""
         import sys
-        sys.path.insert(0, {os.getcwd()!r})
+        sys.path.insert(0, {os.path.dirname(os.path.dirname(os.path.abspath(__file__)))!r})
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from studies import common, sweep
         from workbench.scenes import Plate

@@ -28,6 +28,10 @@ class OutputError(ValueError):
     """An output folder that cannot be written (one line: the folder and what failed)."""
 
 
+class WriteFailed(OSError):
+    """A dataset could be written neither where asked nor in a fallback folder."""
+
+
 class SavedElsewhere(OSError):
     """A dataset could not be written where asked; it was saved at ``fallback`` instead."""
 
@@ -165,15 +169,18 @@ def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Pat
         if not fallback:
             raise
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+        tried = []
         for folder in (fallback_dir(), Path(tempfile.gettempdir()) / "workbench-unsaved"):
             try:
                 where = _write_atomic(ds, folder / f"{path.stem}-{stamp}{path.suffix}")
             except OSError:
+                tried.append(str(folder))
                 continue
             raise SavedElsewhere(f"{path} could not be written ({type(err).__name__}: "
                                  f"{err.strerror or err}); the dataset was saved to {where}",
                                  where) from None
-        raise
+        raise WriteFailed(f"{path} could not be written ({type(err).__name__}: "
+                          f"{err.strerror or err}), nor in {' or '.join(tried)}") from None
 
 
 def _write_atomic(ds: xr.Dataset, path: Path) -> Path:
