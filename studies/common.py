@@ -165,15 +165,16 @@ def check_resolutions(resolutions) -> list[int]:
 
 BYTES_PER_POINT = {
     2: {"particle": 8_000, "fem": 20_000},
-    3: {"particle": 30_000, "fem": 200_000},
+    3: {"particle": 50_000, "fem": 200_000},
 }
 """Memory one particle (or FEM node) of a run needs, bytes, incl. neighbour lists and gradient
-tables (particles) or the sparse tangent and its factorisation (FEM): particles measured as the
-peak-RSS increase of building a csph body (plate, H/Δx = 30, 11 191 particles: 7.3 kB each; 3-D
-block, 12 cells per edge: see ``ESTIMATE_NOTE``), rounded up; the FEM's from the nonzeros of a
-quadratic element's tangent (2-D 100, 3-D 1 100 per node at 12 bytes) times a direct solver's
-fill-in (about 15). An order of magnitude: it refuses a run that cannot fit, not one that is
-merely tight."""
+tables (particles) or the sparse tangent and its factorisation (FEM). Particles: the peak-RSS
+increase of discretising and building a body, measured (2 shared cores): plate, H/Δx = 30,
+11 191 particles — csph 7.3 kB, hpm 0.81 kB, sph 0.57 kB each; 3-D block of the SS curve, 13³
+particles — csph 46.5 kB each; the largest (csph) is taken for every method, rounded up. FEM: not
+measured, from the nonzeros of a quadratic element's tangent (2-D ~100, 3-D ~1 100 per node at 12
+bytes) times a direct solver's fill-in (~15). An order of magnitude: it refuses a run that cannot
+fit, not one that is merely tight."""
 
 
 def machine_memory() -> int:
