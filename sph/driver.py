@@ -36,8 +36,10 @@ Returns a dict: ``status`` (or one per load value), ``parameter`` / ``time``, ev
 name (an array over the load values or records), energies (explicit, J — J/m in 2-D — at each
 record: ``kinetic_energy``, ``strain_energy``, ``external_work``, and ``plastic_work``,
 ``released_energy`` where the body reports them; ``energy_history`` their balance), ``wall_time``
-(the run's cost, set-up included; static: cumulative at each load value), ``loop_time`` (explicit:
-the time loop alone), ``setup_time``, ``n_particles``, ``dt``, ``steps``, the final state
+(the solver's own cost: the time loop or the Newton iterations, without set-up and JIT
+compilation; static: cumulative at each load value), ``setup_time`` (discretisation, method
+build, loads), ``jit_time`` (:func:`jit_estimate`), ``total_time`` (the whole call), ``loop_time``
+(explicit: the time loop alone, JIT included), ``n_particles``, ``dt``, ``steps``, the final state
 (explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``sets`` name →
 indices, ``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the
 connected parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and
@@ -52,6 +54,7 @@ import time
 
 import numpy as np
 
+from workbench import progress
 from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
 from workbench.scenes import model as M
 from workbench.scenes.params import SceneError
@@ -60,6 +63,15 @@ from . import METHODS
 from .diagnostics import linear_momentum, period_amplitude
 from .monitor import Disorder, energy_change
 from .particles import Particles, discretise
+
+def jit_estimate(first_time: float, first_work: float, rest_time: float, rest_work: float) -> float:
+    """The JIT compilation (and numba cache loading) in a loop's first chunk, s: its time less
+    what its work (steps or Newton iterations) costs at the rate of the later chunks; 0 without
+    later chunks to measure the rate on."""
+    if rest_work <= 0 or rest_time <= 0:
+        return 0.0
+    return max(0.0, first_time - first_work * rest_time / rest_work)
+
 
 MAX_CHUNK_VARYING = 20
 """Longest chunk of steps (over which loads are held at their mid-chunk value) when a load or a
@@ -135,6 +147,7 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
             out = run.modal()
         else:
             out = run.explicit(fields, snap_name, field_frames, t0)
+    out["total_time"] = time.perf_counter() - t0
     out.setdefault("n_particles", int(ps.n))
     out["n_free"] = int(np.count_nonzero(~run.fixed.all(axis=1)))
     out["plane"] = model.plane
@@ -290,6 +303,10 @@ class Run:
                               lambda: dict(self.body.field_state(), t=state["lam"]),
                               len(path), 1, max(1, len(path)))
         state = dict(lam=0.0)
+        bar = progress.bar(len(path), snap_name, unit="load", delay=2.0, leave=False)
+        t_start = time.perf_counter()
+        setup_time = t_start - t0
+        its_at = []
 
         def constraints_at(lam):
             return Constraints(self.fixed, self.dead_forces(lam)), self.prescribed_targets(lam)
@@ -302,18 +319,34 @@ class Run:
             for n, v in self.observe(x, f, st).items():
                 out[n][k] = v
             out["iterations"][k] = its
-            out["wall_time"][k] = time.perf_counter() - t0
+            out["wall_time"][k] = time.perf_counter() - t_start
+            its_at.append((k, its))
+            bar.update(1)
             if snap:
                 state["lam"] = lam
                 snap(k + 1)
 
-        if tlb is None:
-            from .relaxation import relax_path
+        try:
+            if tlb is None:
+                from .relaxation import relax_path
 
-            out["status"] = relax_path(self.body, path, constraints_at, on_equilibrium)
-        else:
-            out["status"] = solve_path(tlb, self.ps.X.copy(), path, constraints_at,
-                                       on_equilibrium, method=method)
+                out["status"] = relax_path(self.body, path, constraints_at, on_equilibrium)
+            else:
+                out["status"] = solve_path(tlb, self.ps.X.copy(), path, constraints_at,
+                                           on_equilibrium, method=method)
+        finally:
+            bar.close()
+        # the solver's own time: the first load step's JIT compilation estimated from the rate
+        # (s per Newton iteration or relaxation step) of the later steps, reported apart with the
+        # set-up
+        wt = out["wall_time"]
+        jit = 0.0
+        if its_at and its_at[0][0] == 0:  # iterations per load value
+            its = np.array([i for _, i in its_at], float)
+            jit = jit_estimate(wt[0], its[0], float(np.nanmax(wt) - wt[0]), float(its[1:].sum()))
+        out["wall_time"] = wt - jit
+        out["jit_time"] = jit
+        out["setup_time"] = setup_time
         return out
 
     # -- modal ---------------------------------------------------------------------------------
@@ -423,6 +456,8 @@ class Run:
             snap(0)
         status, criterion = "ok", "none"
         t_loop = 0.0
+        first = None  # (time, steps) of the first chunk: JIT compilation happens there
+        bar = progress.bar(n_steps, snap_name, unit="step", delay=2.0, leave=False)
         t_setup = time.perf_counter() - t0
         every_dis = max(1, drive.n_out // 50)
         next_record = every
@@ -445,6 +480,8 @@ class Run:
             tl0 = time.perf_counter()
             done = body.advance(k, dt, f_new, fixed, v_fix, drive.damping, extra)
             t_loop += time.perf_counter() - tl0
+            first = first or (t_loop, done)
+            bar.update(done)
             w_ext += float(np.sum(f_new * (body.x - x_before)))
             # the constraints: r = −f on a DOF moving at v_fix, work −v_fix · ∫ f dt
             imp = (body.impulse if tracked else
@@ -480,11 +517,13 @@ class Run:
                     status = (f"unstable: particle disorder eta95 = {d95:.3g} > {drive.disorder} "
                               f"at t={body.t:.4g} s")
                     break
+        bar.close()
         if snap:
             snap(body.steps, final=True)
         t = np.asarray(times)
+        jit = jit_estimate(*first, t_loop - first[0], body.steps - first[1]) if first else 0.0
         out = dict(time=t, status=status, criterion=criterion, dt=dt, steps=int(body.steps),
-                   wall_time=time.perf_counter() - t0, loop_time=t_loop, setup_time=t_setup,
+                   wall_time=t_loop - jit, jit_time=jit, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
                    kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
                    energy_history=np.asarray(bal), external_work=np.asarray(wes),

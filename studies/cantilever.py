@@ -16,7 +16,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import Cantilever
 
-from .common import Gate, field_options, field_series, observed_order
+from .common import Gate, field_options, field_series, observed_order, validate
 from .common import ladders as study_ladders
 from .sweep import Task, run_tasks
 
@@ -64,10 +64,8 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
     series (``field_runs``: the (solver, resolution) pairs that do; None: all); the names of the
     written series are the dataset's ``field_series`` attribute. The FEM writes none here (static cantilever)."""
     scene = scene or Cantilever()
+    validate(sys.modules[__name__], scene, solvers, resolutions, quick)  # before any work
     solvers = list(solvers or SOLVERS)
-    for s in solvers:
-        if s not in SOLVERS:
-            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     if "analytic" not in solvers:
         solvers.insert(0, "analytic")
     if "fem" not in solvers:
@@ -86,11 +84,15 @@ def run(scene: Cantilever | None = None, solvers=None, resolutions=None, quick: 
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
     for i, s in enumerate(solvers):
         if s == "analytic":
-            el = np.array([analytic.cantilever_elastica(scene, p) for p in loads])
+            try:
+                el = np.array([analytic.cantilever_elastica(scene, p) for p in loads]).reshape(-1, 2)
+                status[i] = "ok"
+            except (ValueError, ArithmeticError, RuntimeError) as err:  # where the elastica fails
+                el = np.full((len(loads), 2), np.nan)
+                status[i] = f"error: {type(err).__name__}: {' '.join(str(err).split())}"
             tip[i] = el[:, 0]
             horiz[i] = el[:, 1]
             wall[i] = 0.0
-            status[i] = "ok"
             continue
         for r in ladders[s]:
             j = all_res.index(r)

@@ -10,6 +10,8 @@ from __future__ import annotations
 import functools
 import importlib
 import logging
+import math
+import numbers
 import time
 import traceback
 from dataclasses import dataclass
@@ -50,6 +52,7 @@ def run_solver(name: str, scene, resolution: int, **options) -> dict:
     and a ``status`` (``ok``, ``unstable: …``, ``diverged``, ``error: …``)."""
     t0 = time.perf_counter()
     try:
+        _check_memory_of_run(name, scene, resolution)  # refused before it allocates anything
         out = dict(solver_function(name)(scene, resolution, **options))
     except Exception as err:  # a failed run is a result
         log.debug("%s", traceback.format_exc())
@@ -61,6 +64,21 @@ def run_solver(name: str, scene, resolution: int, **options) -> dict:
     status = summary_status(out["status"])
     log.info("run %-10s %-6s resolution=%-4s %7.2f s  %s", scene.name, name, resolution, wall, status)
     return out
+
+
+def _check_memory_of_run(name: str, scene, resolution) -> None:
+    """:func:`check_memory` where the scene has a model and the estimate can be made (a run the
+    estimate cannot judge is left to the solver)."""
+    from workbench.scenes import ParameterError
+
+    if not hasattr(scene, "model") or not isinstance(resolution, numbers.Integral):
+        return
+    try:
+        check_memory(name, scene, int(resolution))
+    except ParameterError:
+        raise
+    except Exception:  # pragma: no cover - no estimate: no refusal
+        log.debug("no memory estimate for %s %s", name, getattr(scene, "name", scene))
 
 
 def summary_status(status) -> str:
@@ -121,15 +139,180 @@ def observed_order(h, err) -> float:
 
 
 def check_resolutions(resolutions) -> list[int]:
+    """The resolutions as integers >= 1 (:class:`~workbench.scenes.ParameterError` otherwise, one
+    line); an empty list is refused."""
+    from workbench.scenes import ParameterError
+
+    allowed = ("allowed: integers >= 1 (particles or elements across the body; a spacing larger "
+               "than the body is not a discretisation)")
+    if isinstance(resolutions, (str, bytes)) or not hasattr(resolutions, "__iter__"):
+        resolutions = [resolutions]
     out = []
     for r in resolutions:
+        if isinstance(r, bool) or not isinstance(r, numbers.Real) or (
+                isinstance(r, float) and not (math.isfinite(r) and r == int(r))):
+            raise ParameterError(f"resolution: {r!r} is not an integer; {allowed}")
         r = int(r)
         if r < 1:
-            raise ValueError(f"resolution: {r} is out of range; allowed: integers >= 1 "
-                             "(particles or elements across the body; a spacing larger than the "
-                             "body is not a discretisation)")
+            raise ParameterError(f"resolution: {r} is out of range; {allowed}")
         out.append(r)
+    if not out:
+        raise ParameterError(f"resolution: the list is empty; {allowed}")
     return out
+
+
+# -- what a run will need, checked before any work starts ----------------------------------------
+
+BYTES_PER_POINT = {
+    2: {"particle": 8_000, "fem": 20_000},
+    3: {"particle": 50_000, "fem": 200_000},
+}
+"""Memory one particle (or FEM node) of a run needs, bytes, incl. neighbour lists and gradient
+tables (particles) or the sparse tangent and its factorisation (FEM). Particles: the peak-RSS
+increase of discretising and building a body, measured (2 shared cores): plate, H/Δx = 30,
+11 191 particles — csph 7.3 kB, hpm 0.81 kB, sph 0.57 kB each; 3-D block of the SS curve, 13³
+particles — csph 46.5 kB each; the largest (csph) is taken for every method, rounded up. FEM: not
+measured, from the nonzeros of a quadratic element's tangent (2-D ~100, 3-D ~1 100 per node at 12
+bytes) times a direct solver's fill-in (~15). An order of magnitude: it refuses a run that cannot
+fit, not one that is merely tight."""
+
+
+def machine_memory() -> int:
+    """Physical memory this process may use, bytes: MemTotal of ``/proc/meminfo`` (else
+    ``os.sysconf``), capped by a cgroup v2 limit (``/sys/fs/cgroup/memory.max``) where set."""
+    import os
+
+    total = 0
+    try:
+        for line in open("/proc/meminfo"):
+            if line.startswith("MemTotal:"):
+                total = int(line.split()[1]) * 1024
+                break
+    except OSError:
+        pass
+    if not total:
+        try:
+            total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        except (ValueError, OSError, AttributeError):
+            total = 0
+    try:
+        limit = open("/sys/fs/cgroup/memory.max").read().strip()
+        if limit.isdigit() and (not total or int(limit) < total):
+            total = int(limit)
+    except OSError:
+        pass
+    return total or 2 ** 62
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as '87 TiB', '7.3 GiB', '512 MiB'."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if abs(n) < 1024 or unit == "EiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024.0
+    return f"{n:.3g} EiB"  # pragma: no cover
+
+
+def estimate_points(scene, resolution: int, solver: str) -> tuple[float, int]:
+    """(points, dim) of one run: particles of a particle method, nodes of the FEM (quadratic
+    elements: 2r + 1 per edge), from the bounding boxes of the model's regions at the spacing
+    ``length / resolution`` — without discretising anything."""
+    model = scene.model()
+    dx = model.length / float(resolution)
+    try:
+        model = scene.model(dx)
+    except Exception:  # a model whose geometry cannot take this spacing: the plain one's extent
+        pass
+    per_length = (2.0 if solver == "fem" else 1.0) / dx
+    points = 0.0
+    for reg in model.regions:
+        b = reg.shape.bounds() if hasattr(reg, "shape") else None
+        if b is None:
+            continue
+        lo, hi = np.asarray(b[0], float), np.asarray(b[1], float)
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            continue
+        points += float(np.prod(np.maximum(hi - lo, 0.0) * per_length + 1.0))
+    return points, int(model.dim)
+
+
+def estimate_bytes(solver: str, scene, resolution: int) -> tuple[float, float, int]:
+    """(bytes, points, bytes per point) one run of ``solver`` on ``scene`` at ``resolution``
+    will need (:data:`BYTES_PER_POINT`)."""
+    points, dim = estimate_points(scene, resolution, solver)
+    per = BYTES_PER_POINT[dim]["fem" if solver == "fem" else "particle"]
+    return points * per, points, per
+
+
+def check_memory(solver: str, scene, resolution: int, available: int | None = None) -> None:
+    """Refuse (:class:`~workbench.scenes.ParameterError`, one line) a run whose estimated memory
+    (:func:`estimate_bytes`) exceeds this machine's (:func:`machine_memory`), naming both and the
+    largest resolution that would fit."""
+    from workbench.scenes import ParameterError
+
+    if solver == "analytic":
+        return
+    need, points, per = estimate_bytes(solver, scene, resolution)
+    have = machine_memory() if available is None else available
+    if need <= have:
+        return
+    dim = estimate_points(scene, 1, solver)[1]
+    r_max = int(resolution * (have / need) ** (1.0 / dim))
+    while r_max > 1 and estimate_bytes(solver, scene, r_max)[0] > have:
+        r_max -= max(1, r_max // 50)
+    kind = "nodes" if solver == "fem" else "particles"
+    raise ParameterError(
+        f"resolution: {resolution} needs about {human_bytes(need)} for {scene.name} with {solver} "
+        f"({points:.3g} {kind} x ~{human_bytes(per)} incl. neighbour lists); this machine has "
+        f"{human_bytes(have)}; allowed: integers in [1, {max(r_max, 1)}] for {solver} here")
+
+
+def validate(study, scene=None, solvers=None, resolutions=None, quick: bool = False):
+    """Check a study's run before any work starts: the scene (its type and its model), the
+    solvers, the resolutions (integers >= 1, not an empty list) and the memory each run will need.
+    Returns (solvers, ladders) as :func:`ladders`; raises
+    :class:`~workbench.scenes.ParameterError` (one line naming the parameter and its allowed
+    range). Calls no solver: cheap enough to run on every input (the property tests do)."""
+    from workbench.scenes import ParameterError, Scene
+
+    scene_cls = getattr(study, "SCENE", None)
+    if scene is None:
+        if scene_cls is None:
+            raise ParameterError(f"scene: {study.NAME} needs a scene; allowed: a Scene instance")
+        scene = scene_cls()
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene: {scene!r} is not a Scene; allowed: a Scene instance")
+    if scene_cls is not None and study.NAME != "stability" and not isinstance(scene, scene_cls):
+        raise ParameterError(f"scene: {type(scene).__name__} is not allowed for {study.NAME}; "
+                             f"allowed: {scene_cls.__name__}")
+    model = scene.model()  # SceneError (one line) where the parameters do not hold together
+    allowed = tuple(getattr(study, "SOLVERS", None) or study.solvers_for(model))
+    if isinstance(solvers, str):
+        solvers = [solvers]
+    solvers = list(solvers or allowed)
+    for s in solvers:
+        if s not in allowed:
+            raise ParameterError(f"solver: {s!r} is not supported by {study.NAME}; allowed: "
+                                 f"{', '.join(allowed)}")
+    if isinstance(resolutions, dict):
+        for s, lad in resolutions.items():
+            check_resolutions(lad)
+    elif resolutions is not None:
+        check_resolutions(resolutions)
+    if getattr(study, "NAME", "") == "scene":  # the generic study: one ladder for every solver
+        default = study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS
+        lads = {s: check_resolutions(resolutions.get(s, default) if isinstance(resolutions, dict)
+                                     else (resolutions or default)) for s in solvers}
+        kept = solvers
+    elif isinstance(getattr(study, "RESOLUTIONS", None), dict):
+        kept, lads = ladders(solvers, resolutions, study, quick)
+    else:  # a study with fixed resolutions of its own (stability)
+        kept, lads = solvers, {}
+    for s, lad in lads.items():
+        for r in lad:
+            check_memory(s, scene, r)
+    return kept, lads
+
 
 
 def ladders(solvers, resolutions, study, quick: bool) -> tuple[list, dict]:

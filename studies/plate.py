@@ -16,7 +16,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import Plate
 
-from .common import Gate, field_options, field_series, observed_order
+from .common import Gate, field_options, field_series, observed_order, validate
 from .common import ladders as study_ladders
 from .sweep import Task, run_tasks
 
@@ -71,10 +71,8 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
     series (``field_runs``: the (solver, resolution) pairs that do; None: all); the names of the
     written series are the dataset's ``field_series`` attribute. The FEM writes its mesh for the dynamic rung only."""
     scene = scene or Plate()
+    validate(sys.modules[__name__], scene, solvers, resolutions, quick)  # before any work
     solvers = list(solvers or SOLVERS)
-    for s in solvers:
-        if s not in SOLVERS:
-            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     if "analytic" not in solvers:
         solvers.insert(0, "analytic")
     if "fem" not in solvers:
@@ -120,7 +118,7 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
             ke, se = out.get("kinetic_energy"), out.get("strain_energy")
             if ke is not None and se is not None and len(ke) > 1:
                 e = np.asarray(ke) + np.asarray(se)
-                drift[i, j] = (e[-1] - e[0]) / e[0]
+                drift[i, j] = (e[-1] - e[0]) / e[0] if e[0] != 0 else np.nan  # no energy: no drift
     ds = xr.Dataset(
         {
             "period": (("solver", "resolution"), period, {"units": "s", "long_name":

@@ -15,7 +15,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.scenes import SSCurve
 
-from .common import Gate
+from .common import Gate, validate
 from .common import ladders as study_ladders
 from .sweep import Task, run_tasks
 
@@ -57,14 +57,17 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
     resolution is kept on ``stress_by_resolution``.
     """
     scene = scene or SSCurve()
+    validate(sys.modules[__name__], scene, solvers, resolutions, quick)  # before any work
     solvers = list(solvers or SOLVERS)
     if "analytic" not in solvers:
         solvers.insert(0, "analytic")  # the reference is always stored beside the methods
-    for s in solvers:
-        if s not in SOLVERS:
-            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     strain = scene.strain_path()
-    exact = analytic.uniaxial_curve(scene.material, strain)
+    try:
+        exact = analytic.uniaxial_curve(scene.material, strain)
+        exact_status = "ok"
+    except (ValueError, ArithmeticError) as err:  # parameters where the closed form breaks down
+        exact = {k: np.full(strain.shape, np.nan) for k in ("sigma", "nominal", "eps_p")}
+        exact_status = f"error: {type(err).__name__}: {' '.join(str(err).split())}"
 
     solvers, ladders = study_ladders(solvers, resolutions, sys.modules[__name__], quick)
     tasks = [Task.make(s, scene, r, **OPTIONS.get(s, {})) for s, lad in ladders.items() for r in lad]
@@ -78,7 +81,7 @@ def run(scene: SSCurve | None = None, solvers=None, resolutions=None, quick: boo
             stress.append(exact["sigma"])
             nominal.append(exact["nominal"])
             wall.append(0.0)
-            status.append("ok")
+            status.append(exact_status)
             n_pts.append(0)
             res_used.append(0)
             continue

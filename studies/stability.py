@@ -27,6 +27,7 @@ error status, not a crash.
 from __future__ import annotations
 
 import dataclasses
+import sys
 
 import numpy as np
 import xarray as xr
@@ -35,7 +36,7 @@ from workbench import results
 from workbench.scenes import Plate
 from workbench.scenes import Ring, Rings, Slab
 
-from .common import Gate
+from .common import Gate, validate
 from .sweep import Task, run_tasks
 
 NAME = "stability"
@@ -78,10 +79,8 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False,
     :func:`studies.sweep.run_tasks` (serially, on dask, cached runs reused). ``scene`` and
     ``resolutions`` are accepted for the common study signature; the scenes and resolutions of
     this study are fixed in ``SETUP``."""
+    validate(sys.modules[__name__], scene, solvers, resolutions, quick)  # before any work
     solvers = list(solvers or SOLVERS)
-    for s in solvers:
-        if s not in SOLVERS:
-            raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     factors = list(QUICK_DT_FACTORS if quick else DT_FACTORS)
     shp = (len(solvers), len(SCENES), len(factors))
     index = list(np.ndindex(*shp))

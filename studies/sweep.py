@@ -16,9 +16,20 @@ disables it.
 Field output (``fields=<folder>``, ``field_frames``) is an option that changes no result: it is left
 out of the cache key, and a task that asks for fields is always run (a cached result has no fields
 on disk), its result then cached under the same key as the run without fields.
+
+No lost work: a run is in the cache as soon as it finishes (written to a temporary file, synced,
+renamed), before the next one starts, so a sweep that is interrupted (Ctrl-C) or killed resumes
+from the cache when the same command is run again; a result served from the cache carries
+``cached = True``. :func:`recording` collects, for the tasks finished inside it, whether each came
+from the cache and its set-up and JIT times (the CLI prints them beside each run's wall time).
+
+Progress: one tqdm bar over the runs with the time left (quiet where stderr is not a terminal,
+:mod:`workbench.progress`) and a log line per finished run. :func:`check_scheduler` refuses a
+scheduler address that cannot be reached, in seconds and in one line, before any work starts.
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import hashlib
@@ -26,11 +37,13 @@ import json
 import logging
 import os
 import pickle
-import sys
+import socket
 import tempfile
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from urllib.parse import urlsplit
+
+from workbench import progress as bars
 
 from .common import run_solver, summary_status
 
@@ -103,14 +116,26 @@ def _cache_get(task: Task):
 
 
 def _cache_put(task: Task, out: dict) -> None:
+    """Store a finished run (synced to disk, then renamed into place: a kill leaves either the
+    whole entry or none). A cache that cannot be written is a warning, never a lost run."""
     d = cache_dir()
-    if d is None or not str(out.get("status", "")).startswith("ok"):
+    if d is None or not str(summary_status(out.get("status", ""))).startswith("ok"):
         return  # failures are not cached: they are re-tried
-    d.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
-    with os.fdopen(fd, "wb") as fh:
-        pickle.dump(out, fh)
-    os.replace(tmp, d / f"{task.key()}.pkl")
+    out = {k: v for k, v in out.items() if k != "cached"}
+    tmp = None
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
+        with os.fdopen(fd, "wb") as fh:
+            pickle.dump(out, fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, d / f"{task.key()}.pkl")
+    except (OSError, pickle.PicklingError) as err:
+        log.warning("run cache %s not written (%s: %s): this run will be recomputed next time",
+                    d, type(err).__name__, err)
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 def execute(task: Task) -> dict:
@@ -119,6 +144,7 @@ def execute(task: Task) -> dict:
 
 
 def _single_thread_numba():
+    os.environ["WORKBENCH_PROGRESS"] = "0"  # a worker's runs draw no bars on the user's terminal
     try:
         import numba
 
@@ -128,26 +154,57 @@ def _single_thread_numba():
     return True
 
 
+_RECORDERS: list[list] = []
+
+
+@contextlib.contextmanager
+def recording():
+    """Collect a record per task :func:`run_tasks` finishes inside the block: a dict with
+    ``scene``, ``solver``, ``resolution``, ``cached`` (served from the run cache), ``status``,
+    ``wall_time`` (the solver's own), ``setup_time`` and ``jit_time`` (where the solver reports
+    them)."""
+    records: list[dict] = []
+    _RECORDERS.append(records)
+    try:
+        yield records
+    finally:
+        _RECORDERS.remove(records)
+
+
+def _total(value) -> float:
+    try:
+        import numpy as np
+
+        v = np.asarray(value, float)
+        return float(np.nanmax(v)) if v.ndim else float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
 class Progress:
-    """A one-line progress bar on stderr (when it is a terminal) and a log line per finished run."""
+    """A progress bar over the runs of a sweep with the time left (tqdm, on stderr where it is a
+    terminal: :mod:`workbench.progress`) and a log line per finished run."""
 
     def __init__(self, total: int, title: str):
-        self.total, self.done, self.title, self.t0 = total, 0, title, time.perf_counter()
-        self.tty = sys.stderr.isatty()
+        self.total, self.done, self.title = total, 0, title
+        self.bar = bars.bar(total, title, unit="run")
 
     def update(self, task: Task, out: dict, cached: bool) -> None:
         self.done += 1
         log.info("[%d/%d] %s: %s%s, %.2f s", self.done, self.total, task.label(),
                  summary_status(out.get("status", "?")), " (cached)" if cached else "",
                  0.0 if cached else float(out.get("run_wall_time", float("nan"))))
-        if self.tty:
-            n = 30
-            k = int(n * self.done / max(self.total, 1))
-            sys.stderr.write(f"\r{self.title} [{'#' * k}{'.' * (n - k)}] {self.done}/{self.total} "
-                             f"{time.perf_counter() - self.t0:6.1f} s")
-            if self.done == self.total:
-                sys.stderr.write("\n")
-            sys.stderr.flush()
+        self.bar.update(1)
+        rec = dict(scene=task.scene.name, solver=task.solver, resolution=task.resolution,
+                   cached=bool(cached), status=summary_status(out.get("status", "?")),
+                   wall_time=_total(out.get("wall_time", float("nan"))),
+                   setup_time=_total(out.get("setup_time", float("nan"))),
+                   jit_time=_total(out.get("jit_time", float("nan"))))
+        for records in _RECORDERS:
+            records.append(rec)
+
+    def close(self) -> None:
+        self.bar.close()
 
 
 def default_scheduler() -> str:
@@ -159,23 +216,64 @@ def run_tasks(tasks: list[Task], scheduler: str | None = None, title: str = "swe
     scheduler = scheduler or default_scheduler()
     results: list[dict | None] = [None] * len(tasks)
     progress = Progress(len(tasks), title)
-    todo = []
-    for i, t in enumerate(tasks):
-        hit = None if t.writes_fields else _cache_get(t)
-        if hit is not None:
-            results[i] = hit
-            progress.update(t, hit, cached=True)
-        else:
-            todo.append(i)
-    if todo and (scheduler == "serial" or len(todo) == 1):
-        for i in todo:
-            out = execute(tasks[i])
-            _cache_put(tasks[i], out)
-            results[i] = out
-            progress.update(tasks[i], out, cached=False)
-    elif todo:
-        _run_on_dask([tasks[i] for i in todo], todo, results, scheduler, progress)
+    try:
+        with bars.logging_through_bars():
+            todo = []
+            for i, t in enumerate(tasks):
+                hit = None if t.writes_fields else _cache_get(t)
+                if hit is not None:
+                    hit["cached"] = True
+                    results[i] = hit
+                    progress.update(t, hit, cached=True)
+                else:
+                    todo.append(i)
+            if todo and (scheduler == "serial" or len(todo) == 1):
+                for i in todo:
+                    out = execute(tasks[i])
+                    _cache_put(tasks[i], out)  # in the cache before the next run starts
+                    results[i] = out
+                    progress.update(tasks[i], out, cached=False)
+            elif todo:
+                _run_on_dask([tasks[i] for i in todo], todo, results, scheduler, progress)
+    finally:
+        progress.close()
     return results  # type: ignore[return-value]
+
+
+SCHEDULER_TIMEOUT = 5.0
+"""Seconds :func:`check_scheduler` waits for a scheduler to answer."""
+
+
+def check_scheduler(scheduler: str | None, timeout: float = SCHEDULER_TIMEOUT) -> str:
+    """``scheduler`` ('serial', 'local', or a dask scheduler address, ``tcp://HOST:PORT`` or
+    ``HOST:PORT``) checked before any work: an address must accept a connection within
+    ``timeout`` s. :class:`~workbench.scenes.ParameterError` (one line: the address and what
+    failed) otherwise. Returns the scheduler."""
+    from workbench.scenes import ParameterError
+
+    allowed = "allowed: serial, local, or the address of a running dask scheduler (tcp://HOST:PORT)"
+    scheduler = scheduler or default_scheduler()  # WORKBENCH_SCHEDULER is checked the same way
+    if scheduler in ("serial", "local"):
+        return scheduler
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"scheduler: {scheduler!r} is not allowed; {allowed}")
+    text = scheduler if "://" in scheduler else f"tcp://{scheduler}"
+    parts = urlsplit(text)
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host, port = None, None
+    if parts.scheme not in ("tcp", "tls") or not host or port is None:
+        raise ParameterError(f"scheduler: {scheduler!r} is not allowed; {allowed}")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as err:
+        why = (f"no answer within {timeout:g} s" if isinstance(err, socket.timeout)
+               else (err.strerror or str(err)))
+        raise ParameterError(f"scheduler: cannot reach {text} ({type(err).__name__}: {why}); "
+                             f"{allowed}") from None
+    return scheduler
 
 
 def _run_on_dask(tasks, index, results, scheduler, progress) -> None:
@@ -188,7 +286,8 @@ def _run_on_dask(tasks, index, results, scheduler, progress) -> None:
         client = Client(cluster)
     else:
         cluster = None
-        client = Client(scheduler)
+        check_scheduler(scheduler)
+        client = Client(scheduler, timeout=f"{int(4 * SCHEDULER_TIMEOUT)}s")
     try:
         client.run(_single_thread_numba)
         futures = {client.submit(execute, t, pure=False, key=f"run-{t.key()}-{k}"): (k, t)

@@ -46,3 +46,18 @@ def test_console_script_runs_analytic_study(tmp_path):
     with xr.open_dataset(tmp_path / "ss_curve.nc") as ds:
         assert ds.stress.sel(solver="analytic").max() > 6e8  # Swift curve reaches ~700 MPa
         assert ds.attrs["param_max_strain"] == 0.3
+
+
+def test_printed_table_says_which_runs_came_from_the_cache(tmp_path, capsys, monkeypatch):
+    # the same command twice: the second serves the csph run from the run cache and says so; the
+    # first shows the run's set-up and JIT apart from the solver's own wall time
+    monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
+    argv = ["run", "ss_curve", "--solver", "csph", "--resolution", "1", "--set", "n_steps=4",
+            "--out", str(tmp_path)]
+    assert cli.main(argv) == 0
+    first = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip().startswith("csph")]
+    assert len(first) == 1 and "(set-up " in first[0] and "JIT " in first[0]
+    assert "(cached)" not in first[0]
+    assert cli.main(argv) == 0
+    again = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip().startswith("csph")]
+    assert len(again) == 1 and again[0].endswith("(cached)")

@@ -1,6 +1,10 @@
 """The results store: one xarray Dataset per study (``../shared/design/contract.md``), provenance
-attributes, and atomic NetCDF writes (temporary file in the same folder, then ``os.replace``), so an
-interrupted run never leaves a corrupt file."""
+attributes, and atomic NetCDF writes (temporary file in the same folder, flushed to disk with
+``fsync``, then ``os.replace``), so an interrupted run never leaves a corrupt file.
+
+No lost work: :func:`check_writable` proves an output folder writable (a probe file) before a
+study starts, and a write that still fails (the disk filled up, the folder vanished) saves the
+dataset in a fallback folder (:func:`fallback_dir`) and raises :class:`SavedElsewhere` naming it."""
 from __future__ import annotations
 
 import datetime as _dt
@@ -18,6 +22,70 @@ import xarray as xr
 from . import __version__
 
 ENGINE = "netcdf4"
+
+
+class OutputError(ValueError):
+    """An output folder that cannot be written (one line: the folder and what failed)."""
+
+
+class WriteFailed(OSError):
+    """A dataset could be written neither where asked nor in a fallback folder."""
+
+
+class SavedElsewhere(OSError):
+    """A dataset could not be written where asked; it was saved at ``fallback`` instead."""
+
+    def __init__(self, message: str, fallback: Path):
+        super().__init__(message)
+        self.fallback = fallback
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (best effort: not every file system allows it)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def check_writable(folder: str | os.PathLike) -> Path:
+    """Create ``folder`` (and its parents) and prove it writable by writing, syncing and removing
+    a probe file; :class:`OutputError` (one line naming the folder and the failure) otherwise."""
+    folder = Path(folder)
+    try:
+        if folder.exists() and not folder.is_dir():
+            raise NotADirectoryError(f"{folder} is a file, not a folder")
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".workbench-probe.", dir=folder)
+        try:
+            os.write(fd, b"probe")
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+            os.unlink(probe)
+    except OSError as err:
+        why = err.strerror or str(err)
+        raise OutputError(f"{folder} cannot be written ({type(err).__name__}: {why}); allowed: a "
+                          "folder this user can create and write") from None
+    return folder
+
+
+def fallback_dir() -> Path:
+    """Where a dataset goes when its own folder fails: ``WORKBENCH_FALLBACK`` if set, else
+    ``unsaved/`` beside the run cache (``WORKBENCH_CACHE`` or ``~/.cache/particle-workbench``),
+    else the system's temporary folder."""
+    env = os.environ.get("WORKBENCH_FALLBACK")
+    if env:
+        return Path(env)
+    base = os.environ.get("WORKBENCH_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "particle-workbench")
+    return Path(base) / "unsaved"
 
 
 @functools.lru_cache(maxsize=1)
@@ -82,10 +150,12 @@ def _netcdf_safe(value):
     return json.dumps(value, default=str)
 
 
-def write(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` to NetCDF atomically. Every data variable must carry ``units``."""
+def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Path:
+    """Write ``ds`` to NetCDF atomically (flushed with ``fsync`` before the rename). Every data
+    variable must carry ``units``. If the file cannot be written (an ``OSError``) and
+    ``fallback``, the dataset is written to :func:`fallback_dir` and :class:`SavedElsewhere`
+    names where."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     missing = [k for k, v in ds.data_vars.items() if "units" not in v.attrs]
     if missing:
         raise ValueError(f"variables without units: {missing}")
@@ -93,16 +163,41 @@ def write(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     ds.attrs = {k: _netcdf_safe(v) for k, v in ds.attrs.items()}
     for v in list(ds.variables.values()):
         v.attrs = {k: _netcdf_safe(a) for k, a in v.attrs.items()}
+    try:
+        return _write_atomic(ds, path)
+    except OSError as err:
+        if not fallback:
+            raise
+        stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+        tried = []
+        for folder in (fallback_dir(), Path(tempfile.gettempdir()) / "workbench-unsaved"):
+            try:
+                where = _write_atomic(ds, folder / f"{path.stem}-{stamp}{path.suffix}")
+            except OSError:
+                tried.append(str(folder))
+                continue
+            raise SavedElsewhere(f"{path} could not be written ({type(err).__name__}: "
+                                 f"{err.strerror or err}); the dataset was saved to {where}",
+                                 where) from None
+        raise WriteFailed(f"{path} could not be written ({type(err).__name__}: "
+                          f"{err.strerror or err}), nor in {' or '.join(tried)}") from None
+
+
+def _write_atomic(ds: xr.Dataset, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         ds.to_netcdf(tmp, engine=ENGINE)
+        with open(tmp, "rb+") as fh:  # on disk before the rename makes it the file
+            os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+    _fsync_dir(path.parent)
     return path
 
 
@@ -117,8 +212,16 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    _fsync_dir(path.parent)
     return path

@@ -1,17 +1,24 @@
 """The ``workbench`` command line (``../shared/design/contract.md``).
 
-Bad input (an unknown study, solver or parameter, a value out of range) prints one line naming the
-parameter and its allowed range and exits with status 2, without a traceback.
+Every input is checked before any work starts (:func:`_validated`): scene parameters (finite, in
+range, lists not empty), solvers, resolutions (and the memory each run would need against this
+machine's), the output folder (a probe file is written), the scheduler (it must answer within
+seconds), the budget. Bad input prints one line naming the parameter and its allowed range and
+exits with status 2, without a traceback. A dataset that cannot be written where asked is saved in
+a fallback folder the one-line message names (exit status 1); an interrupted run (Ctrl-C) says
+that its finished runs are in the run cache and that the same command resumes (exit status 130).
 """
 from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from ..scenes import ParameterError, with_overrides
 
 
@@ -98,9 +105,29 @@ def _scene_solvers(scene) -> tuple:
     return generic.solvers_for(scene.model())
 
 
+def _check_common(args) -> None:
+    """The options every command that runs studies shares: the output folder (created and proved
+    writable by a probe file), the scheduler (reachable), the budget (a finite number >= 0)."""
+    from studies.sweep import check_scheduler
+
+    budget = getattr(args, "budget", 0.0)
+    if budget is not None and not (math.isfinite(budget) and budget >= 0):
+        raise UsageError(f"--budget: {budget:g} is out of range; allowed: [0, inf) s (finite)")
+    try:
+        results.check_writable(args.out)
+    except results.OutputError as err:
+        raise UsageError(f"--out: {err}") from None
+    try:
+        check_scheduler(args.scheduler)
+    except ParameterError as err:
+        raise UsageError(f"--{err}") from None
+
+
 def _validated(args):
+    """The study, scene and resolutions of ``workbench run``, every input checked before any work
+    starts (module doc); UsageError or ParameterError (one line) otherwise."""
     import studies
-    from studies.common import check_resolutions
+    from studies.common import validate
 
     if is_scene_file(args.study):
         from studies import scene as study
@@ -118,33 +145,36 @@ def _validated(args):
         if s not in allowed:
             raise UsageError(f"--solver: {s!r} is not supported by {args.study}; allowed: "
                              f"{', '.join(allowed)}")
-    try:
-        resolutions = check_resolutions(args.resolution) if args.resolution else None
-    except ValueError as err:
-        raise UsageError(str(err)) from None
+    resolutions = list(args.resolution) if args.resolution else None
+    validate(study, scene, args.solver, resolutions, args.quick)  # incl. the memory of every run
+    _check_common(args)
     return study, scene, resolutions
 
 
 def cmd_run(args) -> int:
+    from studies.sweep import recording
+
     from .verify import run_study
 
     study, scene, resolutions = _validated(args)
     name = scene.name if is_scene_file(args.study) else args.study
-    section = run_study(name, args.out, args.quick, solvers=args.solver,
-                        resolutions=resolutions, scene=scene, scheduler=args.scheduler,
-                        budget=args.budget, fields=args.fields, study=study)
+    with recording() as runs:
+        section = run_study(name, args.out, args.quick, solvers=args.solver,
+                            resolutions=resolutions, scene=scene, scheduler=args.scheduler,
+                            budget=args.budget, fields=args.fields, study=study)
     ds = section["dataset"]
-    print(f"{name}: {Path(args.out) / (name + '.nc')}")
+    print(f"{name}: {section.get('written', Path(args.out) / (name + '.nc'))}")
     if args.fields:
         series = [n.strip() for n in str(ds.attrs.get("field_series", "")).split(",") if n.strip()]
         print(f"  fields: {', '.join(str(Path(args.out) / 'fields' / n) for n in series) or 'none written'}")
+    info = {(r["solver"], r["resolution"]): r for r in runs}
     for r in section["rows"]:
         print(f"  {r['solver']:<8} resolution {r['resolution']:<4} error {r['error']:.3e}  "
-              f"wall {r['wall_time']:.3f} s")
+              f"wall {r['wall_time']:.3f} s{_cost_note(info.get((r['solver'], r['resolution'])))}")
     for g in section["gates"]:
         print("  " + g.line())
     if is_scene_file(args.study):
-        _print_observables(ds)
+        _print_observables(ds, info)
     bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel()
            if not (str(s).startswith("ok") or str(s) == "not run")]
     if bad:
@@ -152,7 +182,19 @@ def cmd_run(args) -> int:
     return 1 if bad else 0
 
 
-def _print_observables(ds) -> None:
+def _cost_note(rec) -> str:
+    """'  (cached)' for a run served from the run cache, else its set-up and JIT times (the wall
+    time beside it is the solver's own)."""
+    if rec is None:
+        return ""
+    if rec["cached"]:
+        return "  (cached)"
+    parts = [f"{k} {rec[v]:.2f} s" for k, v in (("set-up", "setup_time"), ("JIT", "jit_time"))
+             if math.isfinite(rec.get(v, math.nan))]
+    return f"  ({', '.join(parts)})" if parts else ""
+
+
+def _print_observables(ds, info=None) -> None:
     """The last value of every observable of a scene run, per solver and resolution."""
     axis = next((d for d in ("parameter", "time", "mode") if d in ds.dims), None)
     names = [v for v in ds.data_vars if axis is not None and axis in ds[v].dims]
@@ -169,18 +211,24 @@ def _print_observables(ds) -> None:
                 ok = y[np.isfinite(y)]
                 vals.append(f"{v} {ok[-1]:.5g} {ds[v].attrs.get('units', '')}" if ok.size else f"{v} -")
             wall = float(ds.wall_time.sel(solver=s, resolution=r))
-            print(f"  {s:<5} resolution {int(r):<4} {st:<6} wall {wall:7.2f} s  " + "; ".join(vals))
+            note = _cost_note((info or {}).get((str(s), int(r))))
+            print(f"  {s:<5} resolution {int(r):<4} {st:<6} wall {wall:7.2f} s{note}  " + "; ".join(vals))
 
 
 def cmd_verify(args) -> int:
     from .verify import verify
 
+    _check_common(args)
     return verify(args.out, args.quick, args.scheduler, args.budget)
 
 
 def cmd_bench(args) -> int:
     from studies import bench
 
+    try:
+        results.check_writable(args.out)
+    except results.OutputError as err:
+        raise UsageError(f"--out: {err}") from None
     try:
         return bench.main(args)
     except bench.UsageError as err:
@@ -236,8 +284,24 @@ def main(argv=None) -> int:
     try:
         return int(args.fn(args) or 0)
     except (UsageError, ParameterError) as err:
-        print(f"workbench: error: {err}", file=sys.stderr)
+        print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
         return 2
+    except (results.SavedElsewhere, results.WriteFailed) as err:
+        print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        from studies.sweep import cache_dir
+
+        where = cache_dir()
+        kept = (f"finished runs are kept in the run cache ({where}): run the same command again "
+                "to resume" if where is not None else "the run cache is off (WORKBENCH_NO_CACHE=1): "
+                "nothing was kept")
+        print(f"workbench: interrupted; {kept}", file=sys.stderr)
+        return 130
+
+
+def _one_line(err) -> str:
+    return " ".join(str(err).split())
 
 
 if __name__ == "__main__":

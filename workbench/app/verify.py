@@ -82,7 +82,9 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
                        scheduler=scheduler)
     if written is not None:
         ds.attrs["field_series"] = written  # the extended ladders ran without field output
-    results.write(ds, outdir / f"{name}.nc")
+    # the dataset first (a failed write saves it in a fallback folder and says where:
+    # results.SavedElsewhere), then the figures
+    saved = results.write(ds, outdir / f"{name}.nc")
     figures = list(study.plot(ds, outdir))
     rows = study.errors(ds)
     label = getattr(study, "ERROR_LABEL", "max relative error [-]")
@@ -91,7 +93,8 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
                                               outdir / f"{name}_accuracy_vs_cost.png", label))
     gates = study.gates(ds)
     section = dict(name=name, gates=gates, rows=rows, figures=figures, error_label=label,
-                   verdict="PASS" if all(g.passed for g in gates) else "FAIL", dataset=ds)
+                   verdict="PASS" if all(g.passed for g in gates) else "FAIL", dataset=ds,
+                   written=saved)
     if hasattr(study, "orders"):
         section["orders"] = study.orders(ds)
     if hasattr(study, "report_tables"):

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any
-
 
 
 class ParameterError(ValueError):
@@ -28,10 +28,15 @@ class SceneError(ParameterError):
 
 def param(default, units: str, doc: str, lo: float | None = None, hi: float | None = None,
           lo_open: bool = False, hi_open: bool = False, choices: tuple | None = None):
-    """A scene field with units, an allowed range (``lo``/``hi``, open or closed) and a description."""
+    """A scene field with units, an allowed range (``lo``/``hi``, open or closed) and a description.
+    A number must be finite unless the default is infinite (``eps_L = inf``: no damage); a tuple
+    of numbers must hold at least one value."""
+    values = default if isinstance(default, tuple) else (default,)
+    infinite = any(isinstance(v, float) and math.isinf(v) for v in values)
     return field(default=default, metadata=dict(units=units, doc=doc, lo=lo, hi=hi,
                                                 lo_open=lo_open, hi_open=hi_open, choices=choices,
-                                                boolean=isinstance(default, bool)))
+                                                boolean=isinstance(default, bool),
+                                                allow_inf=infinite))
 
 
 def _range_text(md) -> str:
@@ -47,8 +52,41 @@ def _range_text(md) -> str:
     if lo is None:
         left = "("
     if hi is None:
-        right = ")"
+        right = "]" if md.get("allow_inf") else ")"
     return f"{left}{lo_s}, {hi_s}{right}"
+
+
+def _kind(default) -> str:
+    if isinstance(default, bool):
+        return "bool"
+    if isinstance(default, int):
+        return "int"
+    if isinstance(default, float):
+        return "float"
+    if isinstance(default, tuple):
+        return "tuple"
+    return "other"
+
+
+def _check_type(name: str, value, default, md) -> None:
+    """The value has the parameter's type: a bool, an integer, a real number, a non-empty tuple of
+    real numbers (a scene built in Python gets the one-line error the command line gets)."""
+    kind = _kind(default)
+    allowed = _range_text(md)
+    if kind == "bool" and not isinstance(value, bool):
+        raise ParameterError(f"{name}: {value!r} is not allowed; allowed: {allowed}")
+    if kind == "int" and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
+        raise ParameterError(f"{name}: {value!r} is not an integer; allowed: integers in {allowed}")
+    if kind == "float" and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+        raise ParameterError(f"{name}: {value!r} is not a number; allowed: {allowed}")
+    if kind == "tuple":
+        if not isinstance(value, tuple) or not all(
+                isinstance(v, numbers.Real) and not isinstance(v, bool) for v in value):
+            raise ParameterError(f"{name}: {value!r} is not a list of numbers; allowed: one or more "
+                                 f"comma-separated values in {allowed}")
+        if default and not value:
+            raise ParameterError(f"{name}: the list is empty; allowed: one or more comma-separated "
+                                 f"values in {allowed}")
 
 
 def _check_value(name: str, value, md) -> None:
@@ -62,10 +100,15 @@ def _check_value(name: str, value, md) -> None:
         for v in value:
             _check_value(name, v, md)
         return
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return
+    value = float(value) if not isinstance(value, numbers.Integral) else value
+    if isinstance(value, float) and not math.isfinite(value) and not (
+            math.isinf(value) and md.get("allow_inf") and value > 0):
+        raise ParameterError(f"{name}: {value:g} is not a finite number; allowed: "
+                             f"{_range_text(md)}{unit_s}")
     lo, hi = md.get("lo"), md.get("hi")
-    bad = (isinstance(value, float) and math.isnan(value))
+    bad = False
     if lo is not None:
         bad |= value <= lo if md.get("lo_open") else value < lo
     if hi is not None:
@@ -84,7 +127,13 @@ class Scene:
         for f in dataclasses.fields(self):
             if f.metadata.get("hidden"):
                 continue
-            _check_value(f.name, getattr(self, f.name), f.metadata)
+            value = getattr(self, f.name)
+            if isinstance(f.default, tuple) and isinstance(value, list):
+                value = tuple(value)
+                object.__setattr__(self, f.name, value)
+            if f.default is not dataclasses.MISSING:
+                _check_type(f.name, value, f.default, f.metadata)
+            _check_value(f.name, value, f.metadata)
         self.check()
 
     def check(self) -> None:
@@ -151,6 +200,12 @@ def with_overrides(scene: Scene, overrides: dict[str, str]) -> Scene:
         except ValueError:
             raise ParameterError(f"{name}: cannot read {text!r} as {type(default).__name__}; "
                                  f"allowed: {_range_text(fields[name].metadata)}") from None
+        for v in (value if isinstance(value, tuple) else (value,)):
+            if (isinstance(v, float) and math.isinf(v) and "inf" not in text.lower()):
+                units = fields[name].metadata.get("units") or ""
+                unit_s = f" {units}" if units and units != "-" else ""
+                raise ParameterError(f"{name}: {text} overflows to inf (not a finite number); "
+                                     f"allowed: {_range_text(fields[name].metadata)}{unit_s}")
         changes[name] = value
     try:
         return dataclasses.replace(scene, **changes)

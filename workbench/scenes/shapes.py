@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from .params import SceneError
 
 
 class Shape:
@@ -68,9 +69,9 @@ class Box(Shape):
     def __post_init__(self):
         lo, hi = tuple(float(v) for v in self.lo), tuple(float(v) for v in self.hi)
         if len(lo) != len(hi) or len(lo) not in (2, 3):
-            raise ValueError(f"Box: lo and hi must both have 2 or 3 coordinates (got {lo}, {hi})")
+            raise SceneError(f"Box: lo and hi must both have 2 or 3 coordinates (got {lo}, {hi})")
         if not all(h > l for l, h in zip(lo, hi)):
-            raise ValueError(f"Box: hi must exceed lo in every coordinate (got {lo}, {hi})")
+            raise SceneError(f"Box: hi must exceed lo in every coordinate (got {lo}, {hi})")
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
 
@@ -106,13 +107,13 @@ class Cylinder(Shape):
     def __post_init__(self):
         object.__setattr__(self, "centre", tuple(float(c) for c in self.centre))
         if not (self.radius > 0 and 0 <= self.inner < self.radius):
-            raise ValueError(f"Cylinder: need 0 <= inner < radius (got inner={self.inner}, "
+            raise SceneError(f"Cylinder: need 0 <= inner < radius (got inner={self.inner}, "
                              f"radius={self.radius})")
         if len(self.centre) == 3:
             if self.axis not in (0, 1, 2) or self.extent is None:
-                raise ValueError("Cylinder: in 3-D give axis (0, 1 or 2) and extent (lo, hi)")
+                raise SceneError("Cylinder: in 3-D give axis (0, 1 or 2) and extent (lo, hi)")
         elif len(self.centre) != 2:
-            raise ValueError(f"Cylinder: centre must have 2 or 3 coordinates (got {self.centre})")
+            raise SceneError(f"Cylinder: centre must have 2 or 3 coordinates (got {self.centre})")
 
     @property
     def dim(self) -> int:
@@ -151,7 +152,7 @@ class HalfSpace(Shape):
     def __post_init__(self):
         n = np.asarray(self.normal, dtype=float)
         if not np.linalg.norm(n) > 0 or len(n) != len(self.point):
-            raise ValueError("HalfSpace: normal must be a non-zero vector of the point's dimension")
+            raise SceneError("HalfSpace: normal must be a non-zero vector of the point's dimension")
         object.__setattr__(self, "point", tuple(float(v) for v in self.point))
         object.__setattr__(self, "normal", tuple(float(v) for v in n / np.linalg.norm(n)))
 
@@ -173,7 +174,7 @@ class Plane(Shape):
 
     def __post_init__(self):
         if self.axis not in (0, 1, 2):
-            raise ValueError(f"Plane: axis must be 0, 1 or 2 (got {self.axis})")
+            raise SceneError(f"Plane: axis must be 0, 1 or 2 (got {self.axis})")
 
     def contains(self, X, tol=0.0):
         X = _points(X)
@@ -216,7 +217,7 @@ class VoronoiCell(Shape):
     def __post_init__(self):
         s = np.asarray(self.seeds, dtype=float)
         if s.ndim != 2 or s.shape[1] not in (2, 3) or not (0 <= self.index < len(s)):
-            raise ValueError(f"VoronoiCell: seeds must be (k, 2 or 3) and 0 <= index < k "
+            raise SceneError(f"VoronoiCell: seeds must be (k, 2 or 3) and 0 <= index < k "
                              f"(got shape {s.shape}, index {self.index})")
         object.__setattr__(self, "seeds", tuple(tuple(float(v) for v in row) for row in s))
 

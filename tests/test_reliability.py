@@ -1,0 +1,248 @@
+"""Reliability (issue 14): every bad input is refused before any work with one line and exit
+status 2; no finished work is lost (run cache, fallback folder, resume after an interrupt or a
+kill, fsync before the rename); progress and the solver's own wall time."""
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from studies import common, sweep
+from workbench import progress, results
+from workbench.app import cli
+from workbench.scenes import Plate
+
+
+def _refused(argv, capsys, monkeypatch, needle):
+    """cli.main(argv) exits 2 with one line containing ``needle``, no study started."""
+    import workbench.app.verify as verify
+
+    def no_work(*a, **k):
+        raise AssertionError("work started before the input was checked")
+
+    monkeypatch.setattr(verify, "run_study", no_work)
+    monkeypatch.setattr(verify, "verify", no_work)
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["run", "cantilever", "--set", "loads="], "loads: the list is empty; allowed: one or more"),
+    (["run", "ss_curve", "--set", "E=1e400"], "E: 1e400 overflows to inf"),
+    (["run", "ss_curve", "--set", "E=nan"], "E: nan is not a finite number"),
+    (["run", "ss_curve", "--set", "eps_L=-inf"], "eps_L: -inf is not a finite number"),
+    (["run", "plate", "--set", "V_f=inf"], "V_f: inf"),
+    (["run", "ss_curve", "--budget", "inf"], "--budget: inf is out of range"),
+    (["run", "ss_curve", "--scheduler", "nonsense"], "--scheduler: 'nonsense' is not allowed"),
+])
+def test_bad_values_are_refused_before_work(argv, needle, capsys, monkeypatch):
+    _refused(argv, capsys, monkeypatch, needle)
+
+
+def test_unreachable_scheduler_is_one_line(capsys, monkeypatch):
+    import socket
+
+    with socket.socket() as s:  # a port nobody listens on (bound, never listening)
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        for argv in (["verify", "--scheduler", f"tcp://127.0.0.1:{port}"],
+                     ["run", "ss_curve", "--scheduler", f"127.0.0.1:{port}"]):
+            err = _refused(argv, capsys, monkeypatch, f"--scheduler: cannot reach tcp://127.0.0.1:{port}")
+            assert "Connection refused" in err or "no answer" in err
+
+
+@pytest.mark.parametrize("where", ["/proc/forbidden", "a_file"])
+def test_unwritable_output_folder_is_refused_before_work(where, tmp_path, capsys, monkeypatch):
+    if where == "a_file":
+        where = tmp_path / "a_file"
+        where.write_text("not a folder")
+    _refused(["run", "ss_curve", "--out", str(where)], capsys, monkeypatch, "--out: ")
+    _refused(["verify", "--out", str(where)], capsys, monkeypatch, "cannot be written")
+
+
+def test_resolution_beyond_the_machine_memory_is_refused(capsys, monkeypatch):
+    err = _refused(["run", "plate", "--resolution", "1000000"], capsys, monkeypatch,
+                   "resolution: 1000000 needs about")
+    assert "this machine has" in err and "allowed: integers in [1, " in err
+    # the largest resolution it names does fit
+    r_max = int(err.rsplit("[1, ", 1)[1].split("]")[0])
+    need = common.estimate_bytes("csph", Plate(), r_max)[0]
+    assert need <= common.machine_memory() < common.estimate_bytes("csph", Plate(), 4 * r_max)[0]
+
+
+def test_memory_estimate_counts_the_particles():
+    # independent count: the particles the discretisation actually makes (node lattice, the held
+    # clamp block and the plate share the face X = 0: the estimate counts it twice, ~10/1342)
+    from sph.driver import model_at
+    from sph.particles import discretise
+
+    for r in (5, 10):
+        model, _ = model_at(Plate(), r)
+        n = discretise(model, r, None).n
+        est, dim = common.estimate_points(Plate(), r, "csph")
+        assert dim == 2 and abs(est - n) / n < 0.02
+
+
+def test_machine_memory_is_read():
+    assert 2 ** 26 < common.machine_memory() < 2 ** 62
+
+
+def test_tiny_tip_velocity_does_not_crash(tmp_path, capsys, monkeypatch):
+    # V_f = 1e-300: the energies are round-off; the stability criterion itself is issue 13's
+    # (sph/monitor.py). Here only: no traceback, a status per run, exit 0 or 1.
+    monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
+    code = cli.main(["run", "plate", "--set", "V_f=1e-300", "--set", "periods=0.05", "--solver",
+                     "csph", "--resolution", "3", "--quick", "--out", str(tmp_path)])
+    out = capsys.readouterr()
+    assert code in (0, 1) and "Traceback" not in out.err and out.err.count("\n") <= 1
+    ds = results.read(tmp_path / "plate.nc")
+    status = str(ds.status.sel(solver="csph", resolution=3).values)
+    assert status.startswith(("ok", "unstable"))
+    assert code == (0 if status.startswith("ok") else 1)
+
+
+# -- no lost work ------------------------------------------------------------------------------
+
+CALLS = []
+
+
+def fake_solve(scene, resolution, **options):
+    CALLS.append(resolution)
+    if options.get("interrupt_at") == resolution:
+        raise KeyboardInterrupt
+    if options.get("exit_at") == resolution:
+        os._exit(137)  # a kill: no clean-up of any kind
+    return {"period": scene.L * resolution, "status": "ok"}
+
+
+@pytest.fixture
+def fake_solver(monkeypatch, tmp_path):
+    monkeypatch.setitem(common.SOLVER_ENTRY, "fake", f"{__name__}:fake_solve")
+    monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
+    CALLS.clear()
+    return tmp_path / "cache"
+
+
+def test_interrupted_sweep_resumes_from_the_cache(fake_solver):
+    tasks = [sweep.Task.make("fake", Plate(), r, interrupt_at=2) for r in (1, 2, 3)]
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run_tasks(tasks, "serial")
+    assert CALLS == [1, 2]
+    # the same sweep, not interrupted this time (its key must not change: a task option that
+    # never fires again stands for "the user pressed Ctrl-C")
+    import studies.sweep as sw
+
+    CALLS.clear()
+    with sw.recording() as rec:
+        out = sw.run_tasks(tasks[:1] + [sweep.Task.make("fake", Plate(), r) for r in (2, 3)], "serial")
+    assert CALLS == [2, 3]  # the finished run was not recomputed
+    assert out[0]["cached"] is True and out[0]["period"] == pytest.approx(0.2)
+    assert [r["cached"] for r in rec] == [True, False, False]
+
+
+def test_killed_sweep_resumes_from_the_cache(fake_solver, tmp_path):
+    script = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {os.path.dirname(os.path.dirname(os.path.abspath(__file__)))!r})
+        sys.path.insert(0, {os.path.dirname(__file__)!r})
+        from studies import common, sweep
+        from workbench.scenes import Plate
+        common.SOLVER_ENTRY["fake"] = "test_reliability:fake_solve"
+        sweep.run_tasks([sweep.Task.make("fake", Plate(), r, exit_at=9) for r in (1, 9)], "serial")
+    """)
+    env = dict(os.environ, WORKBENCH_CACHE=str(fake_solver))
+    p = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+    assert p.returncode == 137, p.stderr
+    assert len(list((fake_solver / "runs").glob("*.pkl"))) == 1  # the finished run, whole
+    assert not list((fake_solver / "runs").glob("*.tmp"))
+    tasks = [sweep.Task.make("fake", Plate(), r, exit_at=9) for r in (1,)]
+    out = sweep.run_tasks(tasks, "serial")
+    assert CALLS == [] and out[0]["cached"] is True
+
+
+def test_ctrl_c_in_the_cli_says_how_to_resume(tmp_path, capsys, monkeypatch):
+    import workbench.app.verify as verify
+
+    monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(verify, "run_study", interrupted)
+    assert cli.main(["run", "ss_curve", "--solver", "analytic", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "run the same command again to resume" in err
+    assert str(tmp_path / "cache") in err
+
+
+def test_failed_write_saves_the_dataset_elsewhere(tmp_path, capsys, monkeypatch):
+    out_dir = tmp_path / "out"
+    monkeypatch.setenv("WORKBENCH_FALLBACK", str(tmp_path / "fallback"))
+    real = results._write_atomic
+
+    def disk_full(ds, path):
+        if path.parent == out_dir:
+            raise OSError(28, "No space left on device")
+        return real(ds, path)
+
+    monkeypatch.setattr(results, "_write_atomic", disk_full)
+    code = cli.main(["run", "ss_curve", "--solver", "analytic", "--out", str(out_dir)])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and len(err.splitlines()) == 1 and "Traceback" not in err
+    saved = list((tmp_path / "fallback").glob("ss_curve-*.nc"))
+    assert len(saved) == 1 and str(saved[0]) in err and "No space left" in err
+    ds = results.read(saved[0])
+    assert ds.stress.sel(solver="analytic").max() > 6e8  # the whole dataset (Swift curve ~700 MPa)
+    assert not list(out_dir.glob("*.nc")) and not list(out_dir.glob(".*.tmp"))
+
+
+def test_files_are_synced_before_the_rename(tmp_path, monkeypatch):
+    import xarray as xr
+
+    events = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(os, "fsync", lambda fd: (events.append("fsync"), real_fsync(fd))[1])
+    monkeypatch.setattr(os, "replace", lambda a, b: (events.append("replace"), real_replace(a, b))[1])
+    ds = xr.Dataset({"x": (("i",), np.arange(3.0), {"units": "m"})})
+    results.write(ds, tmp_path / "x.nc")
+    assert events[:2] == ["fsync", "replace"]
+    events.clear()
+    results.atomic_write_text(tmp_path / "r.md", "text")
+    assert events[:2] == ["fsync", "replace"]
+
+
+# -- progress and wall time ----------------------------------------------------------------------
+
+def test_sweep_progress_bar_only_on_a_terminal(fake_solver, capsys, monkeypatch):
+    tasks = [sweep.Task.make("fake", Plate(), r) for r in (1, 2)]
+    monkeypatch.delenv("WORKBENCH_PROGRESS", raising=False)
+    sweep.run_tasks(tasks, "serial", title="quiet")
+    assert "quiet" not in capsys.readouterr().err  # pytest's stderr is not a terminal
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "1")
+    sweep.run_tasks(tasks, "serial", title="shown")
+    err = capsys.readouterr().err
+    assert "shown" in err and "2/2" in err and "run" in err
+
+
+def test_jit_estimate_subtracts_the_first_chunk_overhead():
+    # first chunk: 10 steps in 5 s; later: 100 steps in 1 s (0.01 s a step) -> 5 - 0.1 s of JIT
+    from sph.driver import jit_estimate
+
+    assert jit_estimate(5.0, 10, 1.0, 100) == pytest.approx(4.9)
+    assert jit_estimate(0.05, 10, 1.0, 100) == 0.0  # never negative
+    assert jit_estimate(5.0, 10, 0.0, 0) == 0.0  # no later chunk: nothing to measure against
+
+
+def test_driver_reports_its_own_time_apart_from_setup_and_jit():
+    from sph import driver
+
+    out = driver.solve("csph", Plate(periods=0.05), 3)
+    assert out["status"] == "ok"
+    assert 0 <= out["jit_time"] <= out["loop_time"]
+    assert out["wall_time"] == pytest.approx(out["loop_time"] - out["jit_time"])
+    assert out["total_time"] >= out["setup_time"] + out["loop_time"]
