@@ -61,7 +61,7 @@ from workbench.scenes.params import SceneError
 
 from . import METHODS
 from .diagnostics import linear_momentum, period_amplitude
-from .monitor import Disorder, energy_change
+from .monitor import Disorder, EnergyGrowth, energy_floor
 from .particles import Particles, discretise
 
 def jit_estimate(first_time: float, first_work: float, rest_time: float, rest_work: float) -> float:
@@ -375,6 +375,10 @@ class Run:
         drive = self.model.drive
         body, ps = self.body, self.ps
         dt = body.time_step(drive.dt_factor)
+        if drive.dt_reference == "spectrum":  # dt_factor times the critical step 2/ω_max
+            from .spectrum import critical_time_step
+
+            dt *= critical_time_step(body, self.fixed) / body.time_step(1.0)
         n_steps = int(math.ceil(drive.t_end / dt))
         every = max(1, n_steps // drive.n_out)  # steps between records
         chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
@@ -447,9 +451,13 @@ class Run:
 
         every_diag = max(1, drive.n_out // 50)
         record()
-        e0 = bal[0]
         scale0 = abs(kes[0] + ses[0])
         e_scale = scale0
+        growth = None
+        if drive.energy_growth is not None:
+            growth = EnergyGrowth(energy_floor(float(np.sum(body.m)), body.wave_speed()),
+                                  drive.energy_growth, scale0)
+            growth.update(0, bal[0], kes[0] + ses[0])
         if dis is not None:
             dh.append(dis(body.x)[0])
         if snap:
@@ -502,12 +510,13 @@ class Run:
                 continue  # loads varying in time: chunks shorter than the interval of records
             next_record = (body.steps // every + 1) * every
             record()
-            if drive.energy_growth is not None:
+            if growth is not None:
                 e_scale = max(e_scale, abs(kes[-1] + ses[-1]))
-                grew, change = energy_change(e0, bal[-1], e_scale, drive.energy_growth)
+                grew, change, rate = growth.update(body.steps, bal[-1], kes[-1] + ses[-1])
                 if grew:
                     criterion = "energy"
-                    status = f"unstable: energy balance grew by {change:+.3g} at t={body.t:.4g} s"
+                    status = (f"unstable: energy balance grew by {change:+.3g} of the energy scale, "
+                              f"exponentially ({rate:.3g} per step), at t={body.t:.4g} s")
                     break
             if dis is not None:
                 d95 = dis(body.x)[0] if (len(times) - 1) % every_dis == 0 or body.steps >= n_steps else dh[-1]

@@ -388,3 +388,11 @@ def theory_dataset(quick: bool = False) -> xr.Dataset:
                                 "rings": rres}),
     )
     return ds
+
+
+def dataset(stability: xr.Dataset | None = None, quick: bool = False,
+            scheduler: str | None = None) -> xr.Dataset:
+    """The variables of :func:`theory_dataset` for :func:`studies.stability.run` to merge into
+    stability.nc (``stability``, the map's dataset, and ``scheduler`` are accepted for the
+    study's hook; these runs are serial: each needs the state at every record)."""
+    return theory_dataset(quick)

@@ -260,9 +260,13 @@ class Explicit:
     """Explicit dynamics to ``t_end`` (s) with the time step ``dt_factor`` times the method's CFL
     estimate, mass-proportional ``damping`` (1/s), observables and energies recorded about
     ``n_out`` times. Stability monitor (one criterion for every method): a non-finite state or a
-    failed material point; the energy balance grown by more than ``energy_growth`` of the largest
-    energy seen (one-sided: dissipation is recorded, not flagged); with ``disorder`` (η₉₅ limit),
-    particle disorder measured on the set ``disorder_set`` (all particles when None)."""
+    failed material point; the energy balance's gain growing exponentially beyond an absolute
+    floor and beyond ``energy_growth`` of the largest energy seen (:mod:`sph.monitor`; one-sided:
+    dissipation is recorded, not flagged); with ``disorder`` (η₉₅ limit),
+    particle disorder measured on the set ``disorder_set`` (all particles when None).
+    ``dt_reference``: what ``dt_factor`` multiplies — 'cfl' (the default: the CFL estimate
+    Δx/c_p) or 'spectrum' (the method's critical step 2/ω_max at the initial state,
+    :mod:`sph.spectrum`)."""
 
     t_end: float
     dt_factor: float = 0.3
@@ -271,6 +275,7 @@ class Explicit:
     energy_growth: float = 0.5
     disorder: float | None = None
     disorder_set: str | None = None
+    dt_reference: str = "cfl"
 
 
 # ------------------------------------------------------------------------------------------------
@@ -527,6 +532,8 @@ class Model:
                 raise SceneError(f"drive: t_end = {d.t_end!r} s is out of range; allowed: (0, inf) s")
             if not 0 < d.dt_factor <= 10:
                 raise SceneError(f"dt_factor: {d.dt_factor!r} is out of range; allowed: (0, 10]")
+            if d.dt_reference not in ("cfl", "spectrum"):
+                raise SceneError(f"dt_reference: {d.dt_reference!r} is not allowed; 'cfl' or 'spectrum'")
             if d.disorder_set is not None and d.disorder_set not in set_names:
                 raise SceneError(f"drive: disorder set '{d.disorder_set}' does not exist")
         if isinstance(d, Modal) and not (isinstance(d.n_modes, int) and d.n_modes >= 1):
