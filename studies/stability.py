@@ -279,7 +279,9 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         if solver in sol:
             g.append(Gate.expect(f"stability: {solver} {scene} at dt factor {float(ds.dt_factor[0]):g}",
                                  _outcome(ds, solver, scene), expected, why))
-    return g
+    from .stability_theory import theory_gates
+
+    return g + theory_gates(ds)
 
 
 def stability_map(ds: xr.Dataset) -> list[list[str]]:
@@ -320,10 +322,12 @@ def stability_map(ds: xr.Dataset) -> list[list[str]]:
 
 
 def report_tables(ds: xr.Dataset) -> list[dict]:
+    from .stability_theory import theory_tables
+
     return [dict(title="Stability map (time-step factor = dt over each method's critical step dt_crit = "
                        "2/omega_max, sph.spectrum; critical factor: [largest stable, smallest unstable); "
                        "criterion: "
-                       + ds.attrs.get("criterion", "") + "):", table=stability_map(ds))]
+                       + ds.attrs.get("criterion", "") + "):", table=stability_map(ds))] + theory_tables(ds)
 
 
 def plot(ds: xr.Dataset, outdir) -> list:

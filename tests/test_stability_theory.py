@@ -2,17 +2,16 @@
 Swegle's tensile-instability indicator (sph/tensile_instability.py), the kinetic energy of the
 non-affine motion (sph/hourglass.py), HPM's per-bond ("kondo") stabilisation and the energy
 drift of the symplectic loop."""
-import dataclasses
 import math
 
 import numpy as np
+import xarray as xr
 import pytest
 
 from sph.hourglass import NonAffineEnergy
 from sph.neighbours import neighbour_list
 from sph.tensile_instability import d2w_dr2, lagrangian_rates, swegle_rates
 from studies import stability_theory as T
-from workbench.scenes import Rings, Slab
 
 
 def _lattice(n, dx):
@@ -121,69 +120,70 @@ def test_nonaffine_energy_zero_for_affine_and_closed_form_for_the_checkerboard()
 
 
 @pytest.fixture(scope="module")
-def slab_history():
-    """Classic SPH on the slab (the study's quick setting: resolution 6, t = 0.05 s)."""
-    sc, res, t_end = T.SWEGLE_SETUP["slab"][1]
-    return T.swegle_history(dataclasses.replace(sc, t_end=t_end), res)
+def theory(quick_verify):
+    """The theory variables of stability.nc as `workbench verify --quick` wrote them (the quick
+    settings of studies.stability_theory: sph on the ring and the slab at resolution 6, the rings
+    at 4 over 0.03 s, the plate drift at 5 over 5 periods), computed once per session."""
+    out, proc = quick_verify
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    with xr.open_dataset(out / "stability.nc") as ds:
+        return ds.load()
 
 
-def test_swegle_predicts_the_slab_clumping(slab_history):
-    """The slab in tension with the Eulerian spline: Swegle predicts instability from the first
-    record with tension on, before the clumping, and every one of the first disordered particles
-    (η_i > 0.15) was predicted unstable one record earlier (agreement 1; a prediction that failed
-    to locate it would score at most the base rate). Measured (quick): agreement 1.0 of 8,
-    t_predicted 0.6 ms, onset 33 ms."""
-    c = T.swegle_comparison(slab_history)
-    assert c["n_first"] > 0, "no clumping observed"
-    assert c["t_predicted"] < c["t_onset"]
-    assert c["agreement"] >= c["base_rate"] - 1e-12
-    assert c["agreement"] == 1.0
+@pytest.mark.parametrize("scene", ["slab", "ring"])
+def test_swegle_predicts_the_clumping(theory, scene):
+    """The Eulerian spline in tension (slab) and in the ring: Swegle predicts instability before the
+    clumping, and every one of the first disordered particles (η_i > 0.15) was predicted unstable
+    one record earlier (agreement 1; a prediction that failed to locate it would score at most the
+    base rate). Measured (quick): slab agreement 1.0 of 8, t_predicted 0.6 ms, onset 33 ms; ring
+    1.0 of 4, 0.5 ms, 5.1 ms."""
+    p = theory.sel(swegle_scene=scene)
+    assert int(p.swegle_n_first) > 0, "no clumping observed"
+    assert float(p.swegle_t_predicted) < float(p.swegle_t_onset)
+    assert float(p.swegle_agreement) >= float(p.swegle_base_rate) - 1e-12
+    assert float(p.swegle_agreement) == 1.0
 
 
-def test_csph_slab_no_tensile_instability_predicted():
+def test_csph_slab_no_tensile_instability_predicted(theory):
     """csph (total Lagrangian) on the same slab: the stress-term rate at the end is ≤ 0 on every
     monitored particle in tension (S ⪰ 0: the geometric stiffness stabilises), where the Eulerian
     kernel predicted instability on all of them; what is positive sits where S has a compressive
-    principal value (the lateral contraction), a minority of the particles, and stays orders of
-    magnitude below the Eulerian rates (measured: 6e5 against ~1e8 1/s²)."""
-    sc, res, t_end = T.SWEGLE_SETUP["slab"][1]
-    r = T.lagrangian_rate_max(dataclasses.replace(sc, t_end=t_end), res)
-    assert r["tension"] <= 0.0, r
-    assert r["positive_fraction"] < 0.5, r
+    principal value (the lateral contraction), a minority of the particles."""
+    assert float(theory.tl_rate_max_tension) <= 0.0
+    assert float(theory.tl_positive_fraction) < 0.5
 
 
-@pytest.fixture(scope="module")
-def rings():
-    sc = Rings(t_end=0.03)
-    return {k: T.rings_hourglass(m, sc, 4, **o) for k, (m, o) in T.RINGS_VARIANTS.items()
-            if k in ("hpm", "hpm_kondo")}
-
-
-def test_kondo_stabilisation_runs_and_suppresses_the_rings_zero_energy_modes(rings):
-    """Plain HPM on the colliding rings puts energy into the non-affine motion (its zero-energy
-    modes); the per-bond ('kondo') stabilisation at α = 1 holds it down (peak K_hg/E₀ at most half
-    of plain HPM's; measured 0.34 % against 2.1 %, the energy-conserving form 0.28 %), and both keep the energy
-    balance (symplectic loop and conservative forces: |ΔE|/E₀ < 1e-3 over the run, the O(Δt²)
-    error of velocity Verlet at dt factor 0.3 being ~1e-4)."""
-    peak = {k: np.max(r["hg"] / r["total"][0]) for k, r in rings.items()}
-    for k, r in rings.items():
-        assert r["status"] == "ok", (k, r["status"])
-        assert abs(r["total"][-1] - r["total"][0]) < 1e-3 * r["total"][0], k
-        assert np.all(r["hg"] <= r["loc"] * (1 + 1e-12))  # the share lies in [0, 1]
+def test_stabilisation_suppresses_the_rings_zero_energy_modes(theory):
+    """Plain HPM and CSPH on the colliding rings put energy into the non-affine motion (their
+    zero-energy modes); the stabilisations hold it down: HPM's per-bond ('kondo') and
+    energy-conserving forms at α = 1 to at most half of plain HPM's peak K_hg/E₀ (measured 0.34 % and
+    0.28 % against 2.1 %), CSPH's hourglass control α = 0.1 below plain CSPH's (1.35 % against
+    3.4 %). Every variant keeps the energy balance (symplectic loop and conservative forces:
+    |ΔE|/E₀ < 1e-3 over the run, the O(Δt²) error of velocity Verlet at dt factor 0.3 being ~1e-4)
+    and the share K_hg/K_loc lies in [0, 1] (an orthogonal projection)."""
+    peak = {str(v): float(theory.hourglass_energy_fraction_peak.sel(rings_variant=v))
+            for v in theory.rings_variant.values}
+    for v in theory.rings_variant.values:
+        assert str(theory.rings_status.sel(rings_variant=v).values) == "ok", v
+        assert float(theory.rings_energy_change.sel(rings_variant=v)) < 1e-3, v
+        share = theory.hourglass_kinetic_share.sel(rings_variant=v).values
+        assert np.all(share[np.isfinite(share)] <= 1 + 1e-12), v
     assert peak["hpm_kondo"] < 0.5 * peak["hpm"], peak
+    assert peak["hpm_stabilised"] < 0.5 * peak["hpm"], peak
+    assert peak["csph_hourglass"] < peak["csph"], peak
 
 
-def test_drift_slope_of_a_symplectic_loop_has_no_secular_trend():
-    """HPM (velocity Verlet) on the plate (resolution 4) over 3 periods: the energy error oscillates, O(Δt²), with
-    no secular trend — the least-squares slope times the run's periods stays below a tenth of the
+@pytest.mark.parametrize("solver", ["hpm", "csph"])
+def test_drift_of_the_symplectic_schemes_has_no_secular_trend(theory, solver):
+    """The plate over 5 periods (resolution 5): the energy error oscillates, O(Δt²), with no
+    secular trend — the least-squares slope times the run's periods stays below a tenth of the
     error's own peak (a non-symplectic second-order scheme drifts by O(Δt²) per period, the same
-    order as the peak, and would fail it); the peak itself is below 1e-3 (Verlet at dt factor 0.3:
-    (ω_max Δt)²/8 with ω_max Δt ≲ 0.3·2.9 ≈ 0.9 bounds the relative error of the fastest mode by
-    ~0.1, and the plate's energy sits in its slow mode, ω Δt ~ 1e-3)."""
-    d = T.plate_drift("hpm", 4, 3.0)
-    assert d["status"] == "ok"
-    assert d["peak"] < 1e-3, d
-    assert abs(d["secular"]) < 0.1 * d["peak"], d
+    order as the peak, and would fail it); the peak itself is below 1e-3 (velocity Verlet at dt
+    factor 0.3: (ω_max Δt)²/8 with ω_max Δt ≲ 0.3·2.9 ≈ 0.9 bounds the relative error of the
+    fastest mode by ~0.1, and the plate's energy sits in its slow mode, ω Δt ~ 1e-3)."""
+    p = theory.sel(drift_solver=solver)
+    assert float(p.drift_peak) < 1e-3
+    assert abs(float(p.drift_secular)) < 0.1 * float(p.drift_peak)
 
 
 def test_drift_slope_of_a_line_is_its_slope():

@@ -1,9 +1,5 @@
 """`workbench verify --quick`, the main job, end to end: exit status, report, datasets per the
 contract, accuracy-versus-cost figures."""
-import os
-import subprocess
-import sys
-
 import pytest
 import xarray as xr
 
@@ -11,12 +7,8 @@ import studies
 
 
 @pytest.fixture(scope="module")
-def verified(tmp_path_factory):
-    out = tmp_path_factory.mktemp("verify")
-    env = dict(os.environ, WORKBENCH_CACHE=str(out / "cache"))
-    proc = subprocess.run([sys.executable, "-m", "workbench.app.cli", "verify", "--quick", "--out", str(out)],
-                          capture_output=True, text=True, env=env, timeout=900)
-    return out, proc
+def verified(quick_verify):
+    return quick_verify
 
 
 def test_verify_quick_passes_its_gates(verified):
