@@ -43,7 +43,13 @@ Our choices (all parameters below; ``workbench list`` shows them):
 * the release strain is tied to the spacing by eq. 5 (G_F fixed): ε_r(Δx) = ε_r · 5 mm / Δx
   (``scale_release``), so the energy released per crack area does not depend on the spacing;
 * no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) is not
-  part of this scene yet.
+  part of this scene yet;
+* ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
+* ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
+  contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic
+  check against the FEM (which meshes one body without contact). A bar's box reaches half a
+  spacing beyond its lattice lines, so that its section is the particles' n dx² (the FEM meshes the
+  box with the same equivalent steel) and no other lattice node lies in it.
 
 Running: ``driver.solve("sph", RCBeam(), 20, stress="hyperelastic")`` (the mortar and the J2 steel
 need classic SPH's hyperelastic stress) and ``driver.solve("csph", RCBeam(), 20,
