@@ -1,6 +1,7 @@
-"""RC mortar beam under drop-weight impact (paper 003, §2 and §4; the scene is
-:class:`workbench.scenes.RCBeam`, its reading of the paper and its choices in
-:mod:`workbench.scenes.rc_beam`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
+"""RC mortar beam under drop-weight impact (003): specimens A and B, classic SPH and CSPH.
+
+Paper 003, §2 and §4; the scene is :class:`workbench.scenes.RCBeam` (its reading of the paper
+and its choices in :mod:`workbench.scenes.rc_beam`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
 failure) and B (400 mm, 1.4 m/s, shear failure), classic SPH (``sph``, the paper's method, with
 the hyperelastic stress path the mortar needs) and CSPH (``csph``, nodal integration: the
 integration-consistent correction is unstable on this scene at the CFL step, issue 13) side by side.
