@@ -515,10 +515,13 @@ class Body:
         ½ (f_n + f_n+1) dt of the force on each fixed DOF is added to it; with ``viscous_work``,
         the energy the artificial viscosity dissipates, −Δt × :func:`viscous_power` at the end of
         each step (velocities v_n+1, positions x_n+1), is added to :attr:`viscous_work`."""
-        fx = self.fixed.astype(bool) if self.impulse is not None else None
+        fx = np.flatnonzero(self.fixed.ravel()) if self.impulse is not None else None
+        if fx is not None and fx.size == 0:
+            fx = None
+        if fx is not None:
+            m_fx = self.m[fx // self.acc.shape[1]]
         for s in range(n):
-            f_old = self.acc[fx] * np.broadcast_to(self.m[:, None], self.acc.shape)[fx] \
-                if fx is not None else None
+            f_old = self.acc.ravel()[fx] * m_fx if fx is not None else None
             kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
             self.indptr, self.indices = self._neighbours(self.x)
             rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
@@ -533,8 +536,7 @@ class Body:
                              self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
                              self.damping, True)
             if fx is not None:
-                f_new = self.acc[fx] * np.broadcast_to(self.m[:, None], self.acc.shape)[fx]
-                self.impulse[fx] += 0.5 * dt * (f_old + f_new)
+                self.impulse.ravel()[fx] += 0.5 * dt * (f_old + self.acc.ravel()[fx] * m_fx)
             if self.track_viscous:
                 self.viscous_work -= dt * viscous_power(self.x, self.v, self.m, self.rho,
                                                         self.indptr, self.indices, self.h, self.c,
