@@ -367,6 +367,35 @@ def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as,
     return bad
 
 
+@njit(parallel=True, **JIT)
+def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta):
+    """Power of Monaghan's artificial viscosity (the Π_ij term of eq. 1), W (W/m in 2-D):
+    Σ_i m_i a^Π_i · v_i = −½ Σ_i Σ_j m_i m_j Π_ij (W'(r_ij)/r_ij) x_ij · v_ij ≤ 0 (the pair term is
+    antisymmetric; Π_ij > 0 only for approaching pairs, v_ij · x_ij < 0, and W' < 0). Its negative
+    times the step is the energy the viscosity dissipates in that step."""
+    N, d = x.shape
+    total = 0.0
+    for i in prange(N):
+        s = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            j = indices[p]
+            r2 = 0.0
+            vr = 0.0
+            for k in range(d):
+                e = x[i, k] - x[j, k]
+                r2 += e * e
+                vr += (v[i, k] - v[j, k]) * e
+            r = math.sqrt(r2)
+            if r <= 0.0 or vr >= 0.0:
+                continue
+            mu_ij = h * vr / (r2 + 0.01 * h * h)
+            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
+                     / (0.5 * (rho[i] + rho[j])))
+            s += m[j] * pi_ij * dw_dr(r, h, 0, d) / r * vr
+        total += -0.5 * m[i] * s
+    return total
+
+
 # ================================================================================================
 # A body
 # ================================================================================================
@@ -382,7 +411,8 @@ class Body:
     ``n_as`` (exponent, 4); ``damping`` mass-proportional, 1/s."""
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
-                 artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None):
+                 artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
+                 viscous_work=False):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
@@ -445,6 +475,9 @@ class Body:
         self.steps = 0
         self.R = np.zeros((N, d, d))
         self.extra_force = None  # callable(body) -> (N, d) forces, e.g. contact between bodies
+        self.track_viscous = bool(viscous_work) and (self.alpha > 0 or self.beta > 0)
+        self.viscous_work = 0.0  # energy dissipated by the artificial viscosity so far, J
+        self.impulse = None  # (N, d) or None: the impulse of the force on each fixed DOF is added
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
         self._accelerations(0.0, kick=False)
 
@@ -478,8 +511,17 @@ class Body:
 
     def step(self, dt: float, n: int = 1) -> int:
         """``n`` steps of size dt; returns the steps completed (fewer if the state became
-        non-finite or a material point failed)."""
+        non-finite or a material point failed). With ``impulse`` (N, d) set, the trapezoid impulse
+        ½ (f_n + f_n+1) dt of the force on each fixed DOF is added to it; with ``viscous_work``,
+        the energy the artificial viscosity dissipates, −Δt × :func:`viscous_power` at the end of
+        each step (velocities v_n+1, positions x_n+1), is added to :attr:`viscous_work`."""
+        fx = np.flatnonzero(self.fixed.ravel()) if self.impulse is not None else None
+        if fx is not None and fx.size == 0:
+            fx = None
+        if fx is not None:
+            m_fx = self.m[fx // self.acc.shape[1]]
         for s in range(n):
+            f_old = self.acc.ravel()[fx] * m_fx if fx is not None else None
             kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
             self.indptr, self.indices = self._neighbours(self.x)
             rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
@@ -493,6 +535,12 @@ class Body:
                              self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
                              self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
                              self.damping, True)
+            if fx is not None:
+                self.impulse.ravel()[fx] += 0.5 * dt * (f_old + self.acc.ravel()[fx] * m_fx)
+            if self.track_viscous:
+                self.viscous_work -= dt * viscous_power(self.x, self.v, self.m, self.rho,
+                                                        self.indptr, self.indices, self.h, self.c,
+                                                        self.alpha, self.beta)
             self.t += dt
             self.steps += 1
             if bad or self.status.any() or not np.isfinite(self.x).all():
@@ -534,7 +582,9 @@ class Body:
 NAME = "sph"
 OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 'hyperelastic'",
                alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
-               artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)")
+               artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)",
+               viscous_work="track the energy the artificial viscosity dissipates (default False: "
+                            "one more pair loop per step)")
 
 
 class Classic(ParticleBody):
@@ -542,10 +592,11 @@ class Classic(ParticleBody):
     row of the particles' material table per particle."""
 
     name = NAME
+    impulse_in_loop = True
 
     def __init__(self, particles, h_ratio: float = 1.3, stress: str = "hypoelastic",
                  alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
-                 n_as: int = 4):
+                 n_as: int = 4, viscous_work: bool = False):
         super().__init__(particles)
         ps = particles
         if ps.plane == "stress":
@@ -553,7 +604,8 @@ class Classic(ParticleBody):
                              "allowed: 'strain' or a 3-D model")
         self.b = Body(ps.X, ps.V, ps.table, ps.dx, h_ratio, stress, alpha, beta,
                       artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
-                      mat_id=ps.mat_id)
+                      mat_id=ps.mat_id, viscous_work=viscous_work)
+        self.b.impulse = self.impulse
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
 
@@ -589,6 +641,19 @@ class Classic(ParticleBody):
 
     def failed(self) -> bool:
         return bool(self.b.status.any())
+
+    def dissipated(self) -> dict:
+        """``plastic_work`` and ``released_energy``, J (the history columns of J2 and the mortar,
+        :func:`sph.diagnostics.dissipated_work`, times the reference volumes, the volumes of the
+        stored energy), and with ``viscous_work`` the energy dissipated by the artificial
+        viscosity, ``viscous_dissipation``, J."""
+        from .diagnostics import dissipated_work
+
+        b = self.b
+        out = dissipated_work(b.table, b.mat_id, b.hist, b.V0) if self.b.hyper else {}
+        if b.track_viscous:
+            out["viscous_dissipation"] = b.viscous_work
+        return out
 
     def field_state(self) -> dict:
         b = self.b

@@ -261,19 +261,18 @@ class CSPH(ParticleBody):
         return e
 
     def dissipated(self) -> dict:
-        """``plastic_work`` and ``released_energy``, J: the J2 history columns W_p and W_rel
-        (J/m³) times the integration volumes (the volumes of the stored energy), the released
-        energy with what the crack pairs released (:mod:`sph.crack`)."""
-        from workbench.materials import HIST_W_P, HIST_W_REL
+        """``plastic_work`` and ``released_energy``, J: the history columns W_p and W_rel (J/m³)
+        of every law that keeps them — J2 and the mortar of 003,
+        :func:`sph.diagnostics.dissipated_work` — times the integration volumes (the volumes of
+        the stored energy), the released energy with what the crack pairs released
+        (:mod:`sph.crack`)."""
+        from .diagnostics import dissipated_work
 
         b = self.tl
-        j2 = np.array([m.law == "j2" for m in b.table.materials], bool)
-        if not j2.any() or b.history.shape[1] <= HIST_W_REL:
-            return {}
-        w = np.where(j2[b.mat_id], self._V_work, 0.0)
-        cut = self.cracks.released if self.cracks is not None else 0.0
-        return dict(plastic_work=float(w @ b.history[:, HIST_W_P]),
-                    released_energy=float(w @ b.history[:, HIST_W_REL]) + cut)
+        out = dissipated_work(b.table, b.mat_id, b.history, self._V_work)
+        if out and self.cracks is not None:
+            out["released_energy"] += self.cracks.released
+        return out
 
     def components(self):
         """(N,) int labels of the connected parts: a pair (a, b) joins a and b when b is still in

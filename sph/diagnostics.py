@@ -153,3 +153,40 @@ def period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
     if len(tc) < MIN_CROSSINGS:
         return math.nan, amp
     return float(2 * np.polyfit(np.arange(len(tc)), tc, 1)[0]), amp
+
+
+# ------------------------------------------------------------------------------------------------
+# Energies that left the stored energy for good (every law with such a history)
+# ------------------------------------------------------------------------------------------------
+
+def work_columns(table) -> tuple[np.ndarray, np.ndarray]:
+    """History columns of the plastic work and of the released (failure, cracking) energy of each
+    material of ``table``, J/m³ of reference volume: (n_mat,) int arrays, −1 where the law keeps
+    none. J2 (:mod:`workbench.materials.j2`): W_p in ``HIST_W_P``, W_rel in ``HIST_W_REL``; the
+    mortar of 003 (:mod:`workbench.materials.mortar`): W_p in ``H_W_PLASTIC``, W_r in
+    ``H_W_RELEASED``; elastic laws: none."""
+    from workbench.materials import HIST_W_P, HIST_W_REL
+    from workbench.materials.mortar import H_W_PLASTIC, H_W_RELEASED
+
+    cols = {"j2": (HIST_W_P, HIST_W_REL), "mortar": (H_W_PLASTIC, H_W_RELEASED)}
+    wp = np.array([cols.get(m.law, (-1, -1))[0] for m in table.materials], np.int64)
+    wr = np.array([cols.get(m.law, (-1, -1))[1] for m in table.materials], np.int64)
+    return wp, wr
+
+
+def dissipated_work(table, mat_id: np.ndarray, history: np.ndarray, V: np.ndarray) -> dict:
+    """``plastic_work`` Σ V_a W_p,a and ``released_energy`` Σ V_a W_rel,a, J (J/m in 2-D), over the
+    points of every law that keeps them (:func:`work_columns`; other points add nothing).
+    mat_id (N,) rows of ``table``; history (N, n_history); V (N,) the volumes the stored energy is
+    integrated with, m³. Empty dict when no material keeps such a history."""
+    wp, wr = work_columns(table)
+    if history is None or not (wp >= 0).any() or np.shape(history)[1] == 0:
+        return {}
+    mat_id = np.asarray(mat_id, np.int64)
+    h = np.asarray(history)
+    n = np.arange(len(mat_id))
+    cp, cr = wp[mat_id], wr[mat_id]
+    Wp = np.where(cp >= 0, h[n, np.maximum(cp, 0)], 0.0)
+    Wr = np.where(cr >= 0, h[n, np.maximum(cr, 0)], 0.0)
+    V = np.asarray(V, float)
+    return dict(plastic_work=float(V @ Wp), released_energy=float(V @ Wr))

@@ -10,6 +10,7 @@ STUDIES = {
     "plate": "studies.plate",
     "stability": "studies.stability",
     "microcantilever": "studies.microcantilever",
+    "rc_beam": "studies.rc_beam",
 }
 # The studies that `workbench verify` runs, in order.
 HEADLINE = ("ss_curve", "cantilever", "plate", "stability")

@@ -17,7 +17,8 @@ from workbench.scenes.rc_beam import D10_AREA, bar_lines, staircase
 @pytest.mark.parametrize("kw, name", [
     (dict(f_t=0.0), "f_t"), (dict(f_c=-1e6), "f_c"), (dict(f_y=0.0), "f_y"),
     (dict(eps_release=1.0e-4), "eps_release"),  # f_t/E = 1.35e-4: no softening branch
-    (dict(velocity=-1.0), "velocity"),
+    (dict(velocity=-1.0), "velocity"), (dict(velocity=0.0), "velocity"),
+    (dict(structure="frame"), "structure"),
     (dict(spacing=0.025), "spacing"),  # above the 20 mm cover
     (dict(specimen="C"), "specimen"),
 ])

@@ -43,7 +43,13 @@ Our choices (all parameters below; ``workbench list`` shows them):
 * the release strain is tied to the spacing by eq. 5 (G_F fixed): ε_r(Δx) = ε_r · 5 mm / Δx
   (``scale_release``), so the energy released per crack area does not depend on the spacing;
 * no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) is not
-  part of this scene yet.
+  part of this scene yet;
+* ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
+* ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
+  contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic
+  check against the FEM (which meshes one body without contact). A bar's box reaches half a
+  spacing beyond its lattice lines, so that its section is the particles' n dx² (the FEM meshes the
+  box with the same equivalent steel) and no other lattice node lies in it.
 
 Running: ``driver.solve("sph", RCBeam(), 20, stress="hyperelastic")`` (the mortar and the J2 steel
 need classic SPH's hyperelastic stress) and ``driver.solve("csph", RCBeam(), 20,
@@ -53,7 +59,8 @@ tests/test_rc_beam.py holds it as a strict xfail).
 
 Observed (quarter model; :meth:`RCBeam.summarise` gives the full beam's): the mid-span bottom
 displacement (probe at x = y = z = 0), the weight's mean displacement, the contact force on the
-weight (the impact force) and on the supports (minus the support reaction).
+weight (the impact force) and on the supports (minus the support reaction), and the force that holds
+the support blocks (``support_hold``, the driver's time mean over each record interval).
 """
 from __future__ import annotations
 
@@ -110,8 +117,8 @@ class RCBeam(Scene):
     name: str = field(default="rc_beam", metadata=dict(hidden=True))
     specimen: str = param("A", "-", "specimen of 003: A (800 mm span, D6 stirrups, 2.2 m/s) or B "
                           "(400 mm, 1.4 m/s)", choices=("A", "B"))
-    velocity: float = param(0.0, "m/s", "impact velocity; 0: the specimen's (A 2.2, B 1.4)",
-                            lo=0, hi=50)
+    velocity: float | None = param(None, "m/s", "impact velocity; default (none): the specimen's "
+                                   "(A 2.2, B 1.4)", lo=0, lo_open=True, hi=50)
     mass: float = param(100.0, "kg", "mass of the weight (the full weight)", lo=0, lo_open=True)
     overhang: float = param(0.02, "m", "beam length past each support", lo=0, lo_open=True, hi=0.5)
     B: float = param(0.075, "m", "section width", lo=0, lo_open=True, hi=1)
@@ -151,11 +158,22 @@ class RCBeam(Scene):
     dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10,
                              lo_open=True)
     n_out: int = param(200, "-", "records over the run", lo=1)
+    structure: str = param("impact", "-", "impact: the weight strikes the plate, supports by "
+                           "contact; beam: the beam with its rebar alone on hinges (a line "
+                           "x = span/2, z = 0 held along z), no plate, weight or contact, lowest "
+                           "modes (the elastic check against the FEM)", choices=("impact", "beam"))
 
     # -- parameters ---------------------------------------------------------------------------
     def check(self):
-        if self.velocity < 0 or (self.velocity == 0 and self.impact_velocity <= 0):
-            raise ParameterError(f"velocity: {self.velocity:g} m/s is out of range; allowed: (0, 50] m/s")
+        if self.velocity is not None:
+            try:  # ``--set velocity=3`` arrives as text (the default is None)
+                v = float(self.velocity)
+            except (TypeError, ValueError):
+                raise ParameterError(f"velocity: cannot read {self.velocity!r} as a number; "
+                                     "allowed: (0, 50] m/s") from None
+            if not 0 < v <= 50:
+                raise ParameterError(f"velocity: {v:g} m/s is out of range; allowed: (0, 50] m/s")
+            object.__setattr__(self, "velocity", v)
         if self.spacing > self.cover * (1 + 1e-9):
             raise ParameterError(f"spacing: {self.spacing:g} m is out of range; allowed: "
                                  f"(0, cover={self.cover:g}] m")
@@ -178,7 +196,7 @@ class RCBeam(Scene):
     @property
     def impact_velocity(self) -> float:
         """The weight's speed at impact, m/s."""
-        return self.velocity if self.velocity > 0 else SPECIMENS[self.specimen]["velocity"]
+        return self.velocity if self.velocity is not None else SPECIMENS[self.specimen]["velocity"]
 
     @property
     def stirrup_positions(self) -> tuple:
@@ -225,7 +243,8 @@ class RCBeam(Scene):
         yb, zb = self.B / 2 - self.cover, self.cover
         zt = zb + self.stirrup_height
         xe = self.span / 2 + self.overhang
-        q = 0.25 * dx  # a box edge a quarter spacing beyond the outer lattice lines
+        q = 0.5 * dx  # a box edge half a spacing beyond the outer lattice lines: the box's
+        # section is the particles' area n dx² (what the FEM meshes), no other node inside
         out = []
         side = math.sqrt(self.bar_area)
         ky, kz = bar_lines(yb, side, dx), bar_lines(zb, side, dx)
@@ -255,6 +274,8 @@ class RCBeam(Scene):
         z_top = math.floor((H + self.plate_thickness) / dx + TOL) * dx  # the plate's top layer
         top = z_top + 0.2 * dx  # the plate's box: its top layer's upper sub-cells outside
         zw = z_top + dx  # the weight's bottom layer: one spacing (the contact distance) above
+        if self.structure == "beam":
+            return self._beam_model(dx)
         steel = self.steel()
         weight = Material.svk(E=self.E_s, nu=self.nu_s, rho=self.weight_density(dx))
         regions = [m.Region("mortar", Box((0.0, 0.0, 0.0), (xe, B2, H)), self.mortar(dx), body="beam"),
@@ -263,14 +284,15 @@ class RCBeam(Scene):
             regions.append(m.Region(name, box, self.steel(scale), priority=pri, body="beam"))
         regions.append(m.Region("weight", Box((0.0, 0.0, zw), (xp, B2, zw + self.weight_height)),
                                 weight, body="weight"))
-        regions.append(m.Region("support", Box((L2 - dx, 0.0, -3 * dx), (L2 + dx, B2, -dx)),
-                                steel, held=True, body="support"))
+        support = Box((L2 - dx, 0.0, -3 * dx), (L2 + dx, B2, -dx))
+        regions.append(m.Region("support", support, steel, held=True, body="support"))
         k = self.contact_stiffness * self.E_s
         return m.Model(
             dim=3, plane=None, length=H, name=self.name, regions=tuple(regions),
             sets=(m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0)),
                   m.Set("midspan_bottom", Point((0.0, 0.0, 0.0))),
-                  m.Set("weight_all", regions[-2].shape, region="weight")),
+                  m.Set("weight_all", regions[-2].shape, region="weight"),
+                  m.Set("support_all", support, region="support")),
             constraints=(m.Roller("sym_x", 0), m.Roller("sym_y", 1)),
             loads=(m.InitialVelocity((0.0, 0.0, -self.impact_velocity), regions=("weight",)),),
             contact=(m.Contact(("weight", "beam"), k, dx), m.Contact(("beam", "support"), k, dx)),
@@ -278,22 +300,52 @@ class RCBeam(Scene):
             observables=(m.Displacement("midspan_w", "midspan_bottom", 2),
                          m.Displacement("weight_w", "weight_all", 2),
                          m.ContactForce("weight_force", "weight", 2),
-                         m.ContactForce("support_force", "support", 2)),
+                         m.ContactForce("support_force", "support", 2),
+                         m.Reaction("support_hold", "support_all", 2)),
             notes=(f"003 specimen {self.specimen}: quarter model (symmetry rollers on x = 0 and "
                    "y = 0); bars on lattice lines with an equivalent steel (E, sigma_y, H, rho x "
                    "A_bar/A_particles); one-sided supports by contact with held blocks; weight a "
                    "separate body of density mass/(4 V_discretised).",))
 
+    def _beam_model(self, dx: float) -> m.Model:
+        """The beam with its rebar alone (mortar, main bar, stirrups; no plate, weight, support
+        blocks or contact), hinged along the line x = span/2, z = 0 (held along z: the line of
+        contact of a hinge support), symmetry rollers on x = 0 and y = 0; its lowest modes."""
+        L2, B2, H = self.span / 2, self.B / 2, self.H
+        xe = L2 + self.overhang
+        regions = [m.Region("mortar", Box((0.0, 0.0, 0.0), (xe, B2, H)), self.mortar(dx), body="beam")]
+        for name, box, scale, pri in self.bars(dx):
+            regions.append(m.Region(name, box, self.steel(scale), priority=pri, body="beam"))
+        q = 0.25 * dx
+        hinge = Box((L2 - q, 0.0, -q), (L2 + q, B2, q))
+        return m.Model(
+            dim=3, plane=None, length=H, name=self.name, regions=tuple(regions),
+            sets=(m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0)),
+                  m.Set("hinge", hinge), m.Set("midspan_bottom", Point((0.0, 0.0, 0.0)))),
+            constraints=(m.Roller("sym_x", 0), m.Roller("sym_y", 1), m.Roller("hinge", 2)),
+            drive=m.Modal(3),
+            observables=(m.Displacement("midspan_w", "midspan_bottom", 2),),
+            notes=(f"003 specimen {self.specimen}, the beam with its rebar alone on hinges: quarter "
+                   "model, lowest modes about the reference state.",))
+
     def summarise(self, out: dict) -> dict:
         """The full beam's histories (the quarter model's forces × 4): ``midspan_displacement``
-        (m, positive downward), ``impact_force`` (N, the plate's push on the weight),
-        ``support_reaction`` (N, both supports together), and their peaks."""
+        (m, positive downward), ``impact_force`` (N, the plate's push on the weight, at the
+        record), ``support_reaction`` (N, both supports together, at the record),
+        ``support_reaction_mean`` (N, the force holding the support blocks, its time mean over the
+        interval since the previous record: Σ R_k Δt_k is the impulse the supports gave, exactly
+        the change of the momentum of weight plus beam along z), and their peaks."""
         import numpy as np
 
+        if "time" not in out or "midspan_w" not in out:
+            return {}  # the modal check: periods only
         w = -np.asarray(out["midspan_w"], float)
         F = 4.0 * np.asarray(out["weight_force"], float)
         R = -4.0 * np.asarray(out["support_force"], float)
-        return dict(midspan_displacement=w, impact_force=F, support_reaction=R,
+        extra = {}
+        if "support_hold" in out:
+            extra["support_reaction_mean"] = 4.0 * np.asarray(out["support_hold"], float)
+        return dict(midspan_displacement=w, impact_force=F, support_reaction=R, **extra,
                     max_displacement=float(np.nanmax(w)) if w.size else math.nan,
                     max_impact_force=float(np.nanmax(F)) if F.size else math.nan,
                     max_support_reaction=float(np.nanmax(R)) if R.size else math.nan)
