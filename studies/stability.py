@@ -243,7 +243,10 @@ def run(scene=None, solvers=None, resolutions=None, quick: bool = False,
     )
     from . import stability_theory
 
-    return ds.merge(stability_theory.dataset(ds, quick=quick, scheduler=scheduler))
+    theory = stability_theory.dataset(ds, quick=quick, scheduler=scheduler)
+    merged = ds.merge(theory)
+    merged.attrs = {**ds.attrs, **theory.attrs}  # merge keeps the first dataset's attributes only
+    return merged
 
 
 def errors(ds: xr.Dataset) -> list[dict]:
