@@ -4,7 +4,7 @@ Paper 003, §2 and §4; the scene is :class:`workbench.scenes.RCBeam` (its readi
 and its choices in :mod:`workbench.scenes.rc_beam`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
 failure) and B (400 mm, 1.4 m/s, shear failure), classic SPH (``sph``, the paper's method, with
 the hyperelastic stress path the mortar needs) and CSPH (``csph``, nodal integration: the
-integration-consistent correction is unstable on this scene at the CFL step, issue 13) side by side.
+integration-consistent correction's critical step is 0.2 of the CFL estimate here) side by side.
 
 Stored per specimen, solver and resolution (``rc_beam.nc``; forces and energies are the full
 beam's, four times the quarter model's): histories of the mid-span displacement, the impact force,
@@ -45,8 +45,9 @@ SPECIMENS = ("A", "B")
 OPTIONS = {"sph": dict(stress="hyperelastic", viscous_work=True), "csph": dict(integration="nodal")}
 """Solver options: sph needs the hyperelastic stress path for the mortar and J2 steel, and tracks
 its artificial viscosity's dissipation for the energy balance; csph runs with nodal integration
-(the integration-consistent correction fails a material point within ~20 steps at the CFL step on
-this scene: tests/test_rc_beam.py, issue 13)."""
+(the integration-consistent correction is stable only below 0.20 Δx/c_p on specimen A at 12.5 mm,
+its critical step 2/ω_max: at 0.9 of it, ``dt_reference='spectrum'``, it runs, at about 4 times the
+cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
 RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
 """Particles across H = 100 mm: 12.5, 10 and 5 mm (the paper's). 20 mm (resolution 5) is not on
 the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within

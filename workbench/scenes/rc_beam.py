@@ -53,9 +53,12 @@ Our choices (all parameters below; ``workbench list`` shows them):
 
 Running: ``driver.solve("sph", RCBeam(), 20, stress="hyperelastic")`` (the mortar and the J2 steel
 need classic SPH's hyperelastic stress) and ``driver.solve("csph", RCBeam(), 20,
-integration="nodal")``: the integration-consistent CSPH (the default) fails a material point within
-a few steps on this scene at 5 mm even at ``dt_factor`` 0.03 (at 12.5–20 mm it runs at 0.1;
-tests/test_rc_beam.py holds it as a strict xfail).
+integration="nodal")``. The integration-consistent CSPH (the default) fails at the CFL step
+(``dt_factor`` 0.3): its critical step 2/ω_max (:mod:`sph.spectrum`) is only 0.20 Δx/c_p on
+specimen A at 12.5 mm (0.40 on B; 0.94 at 20 mm; nodal integration 0.57 at 12.5 mm) — the stiff
+equivalent steel of the bars on lattice lines next to the mortar. With ``dt_reference='spectrum'``
+and ``dt_factor`` 0.9 it runs (stable at 0.9 Δt_crit, exponential growth at 1.2 Δt_crit:
+tests/test_rc_beam.py).
 
 Observed (quarter model; :meth:`RCBeam.summarise` gives the full beam's): the mid-span bottom
 displacement (probe at x = y = z = 0), the weight's mean displacement, the contact force on the
@@ -157,6 +160,9 @@ class RCBeam(Scene):
     t_end: float = param(0.01, "s", "simulated time", lo=0, lo_open=True)
     dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10,
                              lo_open=True)
+    dt_reference: str = param("cfl", "-", "what dt_factor multiplies: cfl (the CFL estimate "
+                              "dx/c_p) or spectrum (the method's critical step 2/omega_max at the "
+                              "initial state, sph.spectrum)", choices=("cfl", "spectrum"))
     n_out: int = param(200, "-", "records over the run", lo=1)
     structure: str = param("impact", "-", "impact: the weight strikes the plate, supports by "
                            "contact; beam: the beam with its rebar alone on hinges (a line "
@@ -296,7 +302,8 @@ class RCBeam(Scene):
             constraints=(m.Roller("sym_x", 0), m.Roller("sym_y", 1)),
             loads=(m.InitialVelocity((0.0, 0.0, -self.impact_velocity), regions=("weight",)),),
             contact=(m.Contact(("weight", "beam"), k, dx), m.Contact(("beam", "support"), k, dx)),
-            drive=m.Explicit(self.t_end, self.dt_factor, n_out=self.n_out),
+            drive=m.Explicit(self.t_end, self.dt_factor, n_out=self.n_out,
+                             dt_reference=self.dt_reference),
             observables=(m.Displacement("midspan_w", "midspan_bottom", 2),
                          m.Displacement("weight_w", "weight_all", 2),
                          m.ContactForce("weight_force", "weight", 2),
