@@ -11,7 +11,8 @@ beam's, four times the quarter model's): histories of the mid-span displacement,
 the support reaction, the energies (kinetic, stored elastic with the contact's, plastic work,
 released by cracking, dissipated by sph's artificial viscosity, external work), the z momentum of
 weight plus beam and the impulse the supports gave; the largest and the residual mid-span
-displacement; the cracked fraction of the mortar by crack orientation (:func:`crack_orientation`).
+displacement; the cracked fraction of the mortar by crack orientation (:func:`crack_orientation`:
+the principal direction of the mortar's damage tensor, from the driver's final history).
 
 Gates (:func:`gates`), each tolerance with its reason beside it: the elastic phase (issue 12
 gate 2) — the first flexural frequency of the beam with its rebar on hinges, csph's modal drive
@@ -205,26 +206,64 @@ def energy_error(out: dict) -> np.ndarray:
     return (bal - bal[0]) / float(out["kinetic_energy"][0])
 
 
-def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray) -> dict:
+CRACK_DAMAGE = 1.0 - 1e-6
+"""A mortar particle is cracked where the largest eigenvalue of its damage tensor Ω reaches 1: a
+direction with φ = 0, its normal stress fully released (an open crack, :mod:`workbench.materials.mortar`;
+the same criterion as the strain stand-in's principal strain above ε_0). The margin: Ω is raised
+to exactly 1 along a principal direction; round-off of the eigen-analysis only."""
+
+
+def damage_tensors(history: np.ndarray) -> np.ndarray:
+    """The mortar's damage tensors Ω (n, 3, 3) from its history rows (n, ≥ 23): columns
+    :data:`workbench.materials.mortar.H_OMEGA` … +5 in the order xx, yy, zz, yz, xz, xy."""
+    from workbench.materials.mortar import H_OMEGA
+
+    v = np.asarray(history, float)[:, H_OMEGA:H_OMEGA + 6]
+    Om = np.empty((len(v), 3, 3))
+    Om[:, 0, 0], Om[:, 1, 1], Om[:, 2, 2] = v[:, 0], v[:, 1], v[:, 2]
+    Om[:, 1, 2] = Om[:, 2, 1] = v[:, 3]
+    Om[:, 0, 2] = Om[:, 2, 0] = v[:, 4]
+    Om[:, 0, 1] = Om[:, 1, 0] = v[:, 5]
+    return Om
+
+
+def crack_classes(cracked: np.ndarray, direction: np.ndarray) -> tuple:
+    """(angle (n,) degrees, fraction {class: cracked particles of that class over all n}): the
+    angle θ = arccos |n_x| of each opening direction n (n, 3) from the span x, binned by
+    :data:`ANGLE_BINS` (the last bin closed at 90°)."""
+    ang = np.degrees(np.arccos(np.clip(np.abs(direction[:, 0]), 0.0, 1.0)))
+    frac = {}
+    for name, (lo, hi) in ANGLE_BINS.items():
+        sel = cracked & (ang >= lo) & ((ang < hi) if hi < 90 else (ang <= hi))
+        frac[name] = float(np.count_nonzero(sel) / max(1, len(ang)))
+    return ang, frac
+
+
+def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray,
+                      history: np.ndarray | None = None) -> dict:
     """The cracked mortar of a final state by orientation.
 
-    The driver returns the final positions, not the mortar's damage tensor, so the crack is read
-    from the deformation: the residual Green–Lagrange strain E = ½(FᵀF − I) of each mortar
-    particle, F by csph's corrected (Bonet–Lok) gradients on the reference neighbours of the
-    beam (:func:`sph.csph.discretise`, :func:`sph.total_lagrangian.deformation_gradients`); a
-    particle is cracked where its largest principal strain exceeds the release strain ε_0(Δx) of
-    the mortar at this spacing (:meth:`RCBeam.release_strain`: the stress along that direction is
-    fully released — an open crack; the cracking strain f_t/E_m, 1.35e-4, is exceeded almost
-    everywhere in a beam deflected by centimetres, Poisson's lateral strain included), its crack
-    opening along that principal direction n; the angle θ = arccos |n_x| (degrees) from the span is binned by
-    :data:`ANGLE_BINS`. Returns ``X`` (n, 3) reference positions of the mortar particles, m;
-    ``strain`` (n,) largest principal strain; ``release_strain`` ε_0(Δx); ``direction`` (n, 3); ``angle`` (n,) degrees;
+    From the damage (``history``, the driver's final material history, rows as the particles):
+    the damage tensor Ω of each mortar particle (:func:`damage_tensors`), its largest eigenvalue ω
+    and principal direction m — the normal of the most released direction, the crack opening; a
+    particle is cracked where ω ≥ :data:`CRACK_DAMAGE` (fully released). Without a history (or
+    with one that is not the mortar's) the stand-in from the deformation: the residual
+    Green–Lagrange strain E = ½(FᵀF − I) of each mortar particle, F by csph's corrected
+    (Bonet–Lok) gradients on the reference neighbours of the beam (:func:`sph.csph.discretise`,
+    :func:`sph.total_lagrangian.deformation_gradients`), cracked where its largest principal strain
+    exceeds the release strain ε_0(Δx) (:meth:`RCBeam.release_strain`), opening along that
+    principal direction. The stand-in's strain is computed in both cases (``strain``,
+    ``strain_fraction``). The opening direction's angle from the span is binned by
+    :data:`ANGLE_BINS` (:func:`crack_classes`). Returns ``X`` (n, 3) reference positions of the
+    mortar particles, m; ``strain`` (n,) largest principal strain; ``release_strain`` ε_0(Δx);
+    ``damage`` (n,) ω (NaN without a history); ``direction`` (n, 3); ``angle`` (n,) degrees;
     ``cracked`` (n,) bool; ``fraction`` {class: cracked particles of that class over all mortar
-    particles}."""
+    particles}; ``strain_fraction`` the stand-in's; ``measure`` 'damage' or 'strain'."""
     from sph import total_lagrangian as tl
     from sph.csph import discretise as csph_discretise
     from sph.driver import model_at
     from sph.particles import discretise
+    from workbench.materials.mortar import N_HISTORY
 
     model, _ = model_at(scene, resolution)
     ps = discretise(model, resolution)
@@ -237,21 +276,29 @@ def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray) -> dict:
     e1, n1 = w[:, -1], v[:, :, -1]
     mortar = ps.region[idx] == ps.region_names.index("mortar")
     e1, n1, X = e1[mortar], n1[mortar], ps.X[idx][mortar]
-    ang = np.degrees(np.arccos(np.clip(np.abs(n1[:, 0]), 0.0, 1.0)))
-    cracked = e1 > scene.release_strain(ps.dx)
-    frac = {}
-    for name, (lo, hi) in ANGLE_BINS.items():
-        sel = cracked & (ang >= lo) & ((ang < hi) if hi < 90 else (ang <= hi))
-        frac[name] = float(np.count_nonzero(sel) / max(1, len(e1)))
-    return dict(X=X, strain=e1, direction=n1, angle=ang, cracked=cracked, fraction=frac,
-                release_strain=scene.release_strain(ps.dx))
+    eps0 = scene.release_strain(ps.dx)
+    strain_cracked = e1 > eps0
+    ang, sfrac = crack_classes(strain_cracked, n1)
+    out = dict(X=X, strain=e1, release_strain=eps0, damage=np.full(len(e1), np.nan),
+               direction=n1, angle=ang, cracked=strain_cracked, fraction=sfrac,
+               strain_fraction=sfrac, measure="strain")
+    h = None if history is None else np.asarray(history, float)
+    if h is not None and h.ndim == 2 and h.shape[0] == ps.n and h.shape[1] >= N_HISTORY:
+        wd, vd = np.linalg.eigh(damage_tensors(h[idx][mortar]))
+        om, m1 = wd[:, -1], vd[:, :, -1]
+        cracked = om >= CRACK_DAMAGE
+        ang, frac = crack_classes(cracked, m1)
+        out.update(damage=om, direction=m1, angle=ang, cracked=cracked, fraction=frac,
+                   measure="damage")
+    return out
 
 
 def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
     nan = math.nan
     s = dict(max_displacement=nan, residual_displacement=nan, max_impact_force=nan,
              max_support_reaction=nan, energy_balance_error=nan, momentum_error=nan,
-             **{f"cracked_{k}": nan for k in ANGLE_BINS})
+             **{f"cracked_{k}": nan for k in ANGLE_BINS},
+             **{f"strain_cracked_{k}": nan for k in ANGLE_BINS})
     if len(out.get("time", ())) < 3:
         return s
     t = np.asarray(out["time"])
@@ -265,8 +312,9 @@ def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
              energy_balance_error=float(np.max(np.abs(energy_error(out)))),
              momentum_error=momentum_error(out))
     if "x" in out and np.isfinite(out["x"]).all():
-        c = crack_orientation(scene, resolution, np.asarray(out["x"]))
+        c = crack_orientation(scene, resolution, np.asarray(out["x"]), out.get("history"))
         s.update({f"cracked_{k}": v for k, v in c["fraction"].items()})
+        s.update({f"strain_cracked_{k}": v for k, v in c["strain_fraction"].items()})
     return s
 
 
@@ -279,10 +327,16 @@ SCALARS = dict(max_displacement=("m", "largest mid-span displacement"),
                energy_balance_error=("-", "max over time |initial KE - (K + E + contact + W_p + "
                                      "W_rel + viscous)| / initial KE"),
                momentum_error=("-", "max over time |p_z - p_z(0) - support impulse| / |p_z(0)|"),
-               **{f"cracked_{k}": ("-", f"mortar particles with an open crack (residual strain "
-                                   f"above the release strain) opening {lo:g}-{hi:g} deg from "
-                                   "the span, over all mortar particles")
-                  for k, (lo, hi) in ANGLE_BINS.items()})
+               **{f"cracked_{k}": ("-", f"mortar particles with an open crack (a fully "
+                                   "released direction: the damage tensor's largest eigenvalue "
+                                   "1; without a history the residual strain above the release "
+                                   f"strain) opening {lo:g}-{hi:g} deg from the span, over all "
+                                   "mortar particles")
+                  for k, (lo, hi) in ANGLE_BINS.items()},
+               **{f"strain_cracked_{k}": ("-", "the residual-strain stand-in of cracked_"
+                                          f"{k} (largest principal residual strain above the "
+                                          "release strain, along it)")
+                  for k in ANGLE_BINS})
 
 
 def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None) -> xr.Dataset:
@@ -325,7 +379,7 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
         for k, v in run_summary(out, sc, r).items():
             scal[k][idx] = v
         if r == max(res) and "x" in out and np.isfinite(out["x"]).all():
-            cracks[(s, sp)] = crack_orientation(sc, r, np.asarray(out["x"]))
+            cracks[(s, sp)] = crack_orientation(sc, r, np.asarray(out["x"]), out.get("history"))
     data = {n: (dims + ("time",), series[n], {"units": u, "long_name": ln})
             for n, (_, u, ln, _) in SERIES.items()}
     data["energy_error"] = (dims + ("time",), extra["energy_error"], {
@@ -358,10 +412,11 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
         plane="none (3-D)", quick=int(quick),
         options="; ".join(f"{s}: {OPTIONS[s]}" for s in solvers),
         angle_bins="; ".join(f"{k}: {lo:g}-{hi:g} deg" for k, (lo, hi) in ANGLE_BINS.items()),
-        crack_measure="largest principal residual Green-Lagrange strain above the release strain "
-                      "eps_release(dx) (F by csph's "
-                      "corrected gradients on the reference neighbours; the driver does not return "
-                      "the damage tensor); the opening direction its principal direction",
+        crack_measure="the mortar's damage tensor from the final history: cracked where its "
+                      "largest eigenvalue reaches 1 (fully released), the opening direction its "
+                      "principal direction; strain_cracked_*: the stand-in, the largest principal "
+                      "residual Green-Lagrange strain above the release strain eps_release(dx) (F "
+                      "by csph's corrected gradients on the reference neighbours)",
         model="quarter model by two symmetry planes; forces and energies x 4 (the full beam)",
         paper_B_max_displacement=PAPER["B"]["max_displacement"],
         paper_B_max_displacement_kernel_reduction=PAPER["B"]["max_displacement_kernel_reduction"],
@@ -403,15 +458,21 @@ def _crack_particles(ds, cracks: dict, solvers) -> None:
     X = np.full(shp + (3,), np.nan)
     nvec = np.full(shp + (3,), np.nan)
     strain = np.full(shp, np.nan)
+    damage = np.full(shp, np.nan)
     for (s, sp), c in cracks.items():
         i, j, k = solvers.index(s), SPECIMENS.index(sp), len(c["X"])
         X[i, j, :k], nvec[i, j, :k], strain[i, j, :k] = c["X"], c["direction"], c["strain"]
+        damage[i, j, :k] = c["damage"]
     ds["mortar_X"] = (("solver", "specimen", "particle", "axis"), X, {
         "units": "m", "long_name": "reference positions of the mortar particles, finest run (NaN: padding)"})
     ds["mortar_strain"] = (("solver", "specimen", "particle"), strain, {
         "units": "-", "long_name": "largest principal residual strain at the end of the run"})
+    ds["mortar_damage"] = (("solver", "specimen", "particle"), damage, {
+        "units": "-", "long_name": "largest eigenvalue of the damage tensor at the end of the run "
+        "(NaN: no history)"})
     ds["mortar_opening"] = (("solver", "specimen", "particle", "axis"), nvec, {
-        "units": "-", "long_name": "its principal direction (the crack opening)"})
+        "units": "-", "long_name": "the crack opening direction: the damage tensor's principal "
+        "direction (the residual strain's without a history)"})
 
 
 # -- gates, rows, figures -----------------------------------------------------------------------
@@ -547,9 +608,10 @@ def plot(ds: xr.Dataset, outdir) -> list:
 
 def crack_figure(ds: xr.Dataset, path):
     """The cracked beams (as Fig. 16 and 19 of 003): the mortar particles of the finest run in the
-    symmetry plane y = 0, at their reference positions, coloured by the largest residual principal
-    strain over the release strain at that spacing (clipped to [0, 2]), the crack line drawn where
-    it exceeds it (an open crack, :func:`crack_orientation`)."""
+    symmetry plane y = 0, at their reference positions, coloured by the damage (the damage
+    tensor's largest eigenvalue; without a history the largest residual principal strain over the
+    release strain at that spacing, clipped to [0, 2]), the crack line — perpendicular to the
+    principal damage direction — drawn where the particle is cracked (:func:`crack_orientation`)."""
     import matplotlib.pyplot as plt
 
     from .figures import save
@@ -564,14 +626,19 @@ def crack_figure(ds: xr.Dataset, path):
             ax = axes[i, j]
             X = ds.mortar_X.sel(solver=s, specimen=sp).values
             e = ds.mortar_strain.sel(solver=s, specimen=sp).values
+            d = (ds.mortar_damage.sel(solver=s, specimen=sp).values if "mortar_damage" in ds
+                 else np.full_like(e, np.nan))
             n = ds.mortar_opening.sel(solver=s, specimen=sp).values
             ok = np.isfinite(e) & (np.abs(X[:, 1]) < 1e-9)
             if not ok.any():
                 ax.set_axis_off()
                 continue
-            sc = ax.scatter(X[ok, 0] * 1e3, X[ok, 2] * 1e3, c=np.clip(e[ok] / eps_cr, 0, 2),
-                            cmap="magma_r", s=10, vmin=0, vmax=2)
-            cr = ok & (e > eps_cr)
+            if np.isfinite(d[ok]).all():
+                c, vmax, label, cr = d[ok], 1.0, "damage", ok & (d >= CRACK_DAMAGE)
+            else:
+                c, vmax, label, cr = np.clip(e[ok] / eps_cr, 0, 2), 2.0, "strain / release strain", ok & (e > eps_cr)
+            sc = ax.scatter(X[ok, 0] * 1e3, X[ok, 2] * 1e3, c=c, cmap="magma_r", s=10, vmin=0,
+                            vmax=vmax)
             # the crack line: perpendicular to the opening, in the x-z plane
             ax.quiver(X[cr, 0] * 1e3, X[cr, 2] * 1e3, -n[cr, 2], n[cr, 0], angles="xy",
                       pivot="middle", headwidth=0, headlength=0, headaxislength=0, scale=40,
@@ -580,5 +647,5 @@ def crack_figure(ds: xr.Dataset, path):
             ax.set_title(f"{sp}, {s} (crack lines blue)", fontsize=9)
             ax.set_xlabel("x from mid-span [mm]")
             ax.set_ylabel("z [mm]")
-            fig.colorbar(sc, ax=ax, shrink=0.7, label="strain / release strain")
+            fig.colorbar(sc, ax=ax, shrink=0.7, label=label)
     return save(fig, path)
