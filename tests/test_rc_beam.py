@@ -167,3 +167,121 @@ def test_consistent_csph_is_stable_below_its_critical_step(consistent_a):
     assert np.max(np.abs(energy_error(ok))) <= TOL_ENERGY
     assert bad["status"].startswith("unstable")
     assert bad["dt"] == pytest.approx(1.2 * dt_crit, rel=1e-12)
+
+
+# -- the kernel reduction of 003 §4.2(2) in classic SPH -------------------------------------------
+@pytest.fixture(scope="module")
+def small_block():
+    """A jittered 5³ block (3-D, 10 mm spacing) with random stresses and velocities, its
+    neighbours, and one interior particle p (index 62, the centre) taken as fully released."""
+    from sph.kernels import SUPPORT
+    from sph.neighbours import neighbour_list
+
+    rng = np.random.default_rng(7)
+    dx = 0.01
+    g = np.arange(5) * dx
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    x = np.ascontiguousarray(x + 0.1 * dx * rng.standard_normal(x.shape))
+    n = len(x)
+    h = 1.3 * dx
+    ip, ix = neighbour_list(x, SUPPORT * h)
+    s = rng.standard_normal((n, 3, 3)) * 1e6
+    return dict(x=x, v=rng.standard_normal((n, 3)), m=np.full(n, 2.2),
+                rho=2200.0 * (1 + 0.05 * rng.random(n)), sigma=0.5 * (s + s.transpose(0, 2, 1)),
+                c=np.full(n, 2300.0), h=h, ip=ip, ix=ix, p=62, phi=0.05)
+
+
+def _without(ip, ix, i, p):
+    """The neighbour list with the pair (i, p) removed from row i (CSR)."""
+    row = ix[ip[i]:ip[i + 1]]
+    keep = np.ones(len(ix), bool)
+    keep[ip[i] + np.flatnonzero(row == p)] = False
+    ip2 = ip.copy()
+    ip2[i + 1:] -= 1
+    return ip2, ix[keep]
+
+
+def test_kernel_reduction_scales_the_forces_across_a_released_particle(small_block):
+    """sph.classic.force_pass with the kernel factors kf (φ_min at p, 1 elsewhere) against the
+    unreduced pass: p's acceleration is φ_min times the unreduced one (all its pairs cross it); a
+    neighbour i's is its acceleration without the pair (i, p) (the neighbour list with that pair
+    removed: an independent split of the sum) plus φ_min times that pair's share; a particle with p
+    not among its neighbours is untouched; Σ m a stays zero (the factor is symmetric).
+    Tolerance: round-off of the pair sums."""
+    from sph.classic import force_pass
+
+    b = small_block
+    n, p, phi = len(b["x"]), b["p"], b["phi"]
+    zero, fixed = np.zeros((n, 3)), np.zeros((n, 3), np.uint8)
+    R = np.zeros((n, 3, 3))
+
+    def acc(ip, ix, kf=None):
+        a = np.zeros((n, 3))
+        force_pass(b["x"], b["v"], b["m"], b["rho"], b["sigma"], R, ip, ix, b["h"], b["c"], 1.0,
+                   1.0, 0, 1.0, zero, a, fixed, zero, 0.0, 0.0, False, kf)
+        return a
+
+    kf = np.ones(n)
+    kf[p] = phi
+    full, red = acc(b["ip"], b["ix"]), acc(b["ip"], b["ix"], kf)
+    scale = np.abs(full).max()
+    assert np.allclose(red[p], phi * full[p], rtol=0, atol=1e-12 * scale)
+    nb = [i for i in range(n) if i != p and p in b["ix"][b["ip"][i]:b["ip"][i + 1]]]
+    far = [i for i in range(n) if i != p and i not in nb]
+    assert len(nb) > 20 and far
+    near = sorted(nb, key=lambda i: np.linalg.norm(b["x"][i] - b["x"][p]))[:6]  # at ~Δx
+    for i in near:
+        rest = acc(*_without(b["ip"], b["ix"], i, p))[i]
+        assert np.allclose(red[i], rest + phi * (full[i] - rest), rtol=0, atol=1e-12 * scale)
+        assert np.linalg.norm(full[i] - rest) > 1e-3 * scale  # the pair's share is not small
+    assert np.array_equal(red[far], full[far])
+    assert np.allclose((b["m"][:, None] * red).sum(axis=0), 0.0, atol=1e-12 * scale * b["m"].sum())
+
+
+def test_kernel_reduction_scales_the_velocity_gradient_across_a_released_particle(small_block):
+    """sph.classic.rates_pass, hypoelastic from zero stress over a unit step (σ = λ tr L I + 2μ sym
+    L, linear in L): with the kernel factors, p's stress is φ_min times the unreduced one and a
+    neighbour i's is the stress without the pair (i, p) plus φ_min times that pair's share."""
+    from sph.classic import rates_pass
+
+    b = small_block
+    n, p, phi = len(b["x"]), b["p"], b["phi"]
+    lam, mu = np.full(n, 3e9), np.full(n, 5e9)
+
+    def stress(ip, ix, kf=None):
+        sig = np.zeros((n, 3, 3))
+        rates_pass(b["x"], b["v"], b["m"], b["rho"], b["rho"].copy(), sig,
+                   np.tile(np.eye(3), (n, 1, 1)), ip, ix, b["h"], 1.0, lam, mu, False,
+                   np.zeros((1, 16)), np.zeros(n, np.int64), np.zeros((n, 0)), np.zeros((n, 0)),
+                   0.0, np.zeros(n, np.int64), np.zeros((n, 3, 3)), kf)
+        return sig
+
+    kf = np.ones(n)
+    kf[p] = phi
+    full, red = stress(b["ip"], b["ix"]), stress(b["ip"], b["ix"], kf)
+    scale = np.abs(full).max()
+    assert np.allclose(red[p], phi * full[p], rtol=0, atol=1e-12 * scale)
+    i = int(b["ix"][b["ip"][p]:b["ip"][p + 1]][0])
+    rest = stress(*_without(b["ip"], b["ix"], i, p))[i]
+    assert np.allclose(red[i], rest + phi * (full[i] - rest), rtol=0, atol=1e-12 * scale)
+
+
+def test_kernel_factors_from_the_released_flag():
+    """sph.classic.kernel_factors: φ_min of the particle's mortar where its fully-released flag is
+    set, 1 for partly released mortar and for any other law (the steel's history column 16 is not a
+    flag); and the option needs the hyperelastic stress path."""
+    from sph.classic import Body, kernel_factors
+    from workbench.materials import Material, MaterialTable
+    from workbench.materials.mortar import H_RELEASED
+
+    mortar = Material.mortar(E=11.9e9, nu=0.22, f_t=1.61e6, f_c=16.1e6, eps_release=0.017,
+                             phi_min=0.07)
+    table = MaterialTable((Material.j2_linear(E=2e11, nu=0.3, sigma_y0=4e8, H=2e9), mortar))
+    mat_id = np.array([1, 1, 0, 1])
+    h = np.zeros((4, table.n_history))
+    h[[0, 2], H_RELEASED] = 1.0
+    h[3, H_RELEASED - 1] = 0.9  # damaged, not released
+    assert np.array_equal(kernel_factors(table, mat_id, h, np.empty(4)), [0.07, 1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="^kernel_reduction"):
+        Body(np.zeros((2, 3)), np.ones(2), mortar, 0.01, stress="hypoelastic",
+             kernel_reduction=True)
