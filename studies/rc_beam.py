@@ -54,6 +54,11 @@ RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
 the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within
 0.2 ms at any time-step factor (measured at 0.1 and 0.3)."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
+KERNEL_REDUCTION_SPECIMEN = "B"
+"""The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
+released mortar particles × φ_min = 0.05): 003 runs it on specimen B, whose largest displacement it
+doubles. A full run adds sph on B with it at every resolution (the ``kernel_reduction`` dimension
+of the ``kr_*`` variables); ``--quick`` does not."""
 QUICK_T_END = 5e-4
 """``--quick``: the first 0.5 ms (the first contact pulse and the start of the bending), 12.5 mm."""
 N_TIME = 201
@@ -165,6 +170,12 @@ def run(scene: RCBeam | None = None, solvers=None, resolutions=None, quick: bool
                     opts["fields"] = str(fields)
                 tasks.append(Task.make(s, sc, r, **opts))
                 keys.append((s, sp, r))
+    kr_keys = []
+    if "sph" in solvers and not quick:
+        sc = scene_for(scene, KERNEL_REDUCTION_SPECIMEN, quick)
+        for r in lad["sph"]:
+            tasks.append(Task.make("sph", sc, r, **OPTIONS["sph"], kernel_reduction=True))
+            kr_keys.append(r)
     modal_keys = []
     if "csph" in solvers:
         for sp in MODAL_SPECIMENS[bool(quick)]:
@@ -175,9 +186,10 @@ def run(scene: RCBeam | None = None, solvers=None, resolutions=None, quick: bool
                 modal_keys.append((s, sp))
     done = run_tasks(tasks, scheduler, NAME)
     outs = dict(zip(keys, done[:len(keys)]))
-    modal = dict(zip(modal_keys, done[len(keys):]))
+    kr = dict(zip(kr_keys, done[len(keys):len(keys) + len(kr_keys)]))
+    modal = dict(zip(modal_keys, done[len(keys) + len(kr_keys):]))
     res = sorted({r for v in lad.values() for r in v})
-    ds = dataset(scene, outs, solvers, res, quick, modal)
+    ds = dataset(scene, outs, solvers, res, quick, modal, kr)
     if fields is not None:
         from .common import field_series
 
@@ -339,9 +351,11 @@ SCALARS = dict(max_displacement=("m", "largest mid-span displacement"),
                   for k in ANGLE_BINS})
 
 
-def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None) -> xr.Dataset:
-    """The study's dataset from the runs ``outs`` {(solver, specimen, resolution): driver output}
-    and the modal runs ``modal`` {(csph | fem, specimen): output} of gate 2."""
+def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None,
+            kr: dict | None = None) -> xr.Dataset:
+    """The study's dataset from the runs ``outs`` {(solver, specimen, resolution): driver output},
+    the modal runs ``modal`` {(csph | fem, specimen): output} of gate 2 and classic SPH's runs with
+    the kernel reduction ``kr`` {resolution: output} (specimen :data:`KERNEL_REDUCTION_SPECIMEN`)."""
     t_end = min(scene.t_end, QUICK_T_END) if quick else scene.t_end
     time = np.linspace(0.0, t_end, N_TIME)
     dims = ("solver", "specimen", "resolution")
@@ -407,6 +421,7 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
     ds = xr.Dataset(data, coords=coords)
     _crack_particles(ds, cracks, solvers)
     _modal(ds, modal or {})
+    _kernel_reduction(ds, outs, kr or {}, res, time)
     ds.attrs.update(results.provenance(NAME, scene))
     ds.attrs.update(
         plane="none (3-D)", quick=int(quick),
@@ -421,8 +436,43 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
         paper_B_max_displacement=PAPER["B"]["max_displacement"],
         paper_B_max_displacement_kernel_reduction=PAPER["B"]["max_displacement_kernel_reduction"],
         paper_note="003 gives A's displacement history only in Fig. 17 (no number in the text); "
-                   "the kernel reduction of 003 4.2(2) is not modelled")
+                   "the kernel reduction of 003 4.2(2): classic SPH's kernel_reduction option, "
+                   "specimen B in a full run (kr_* variables)")
     return ds
+
+
+def _kernel_reduction(ds, outs: dict, kr: dict, res, time) -> None:
+    """Classic SPH on specimen :data:`KERNEL_REDUCTION_SPECIMEN` without (the main runs) and with
+    the kernel reduction of 003 §4.2(2): the ``kernel_reduction`` dimension (0: without, 1: with)
+    of the mid-span displacement history, its largest value and the run status."""
+    if not kr:
+        return
+    sp = KERNEL_REDUCTION_SPECIMEN
+    w = np.full((2, len(res), len(time)), np.nan)
+    wmax = np.full((2, len(res)), np.nan)
+    status = np.full((2, len(res)), "not run", dtype=object)
+    for k, runs in enumerate(({r: outs.get(("sph", sp, r)) for r in res}, kr)):
+        for r, out in runs.items():
+            if out is None or r not in res:
+                continue
+            j = res.index(r)
+            status[k, j] = str(out.get("status", "error: no status"))
+            t = np.asarray(out.get("time", ()), float)
+            if len(t) < 2:
+                continue
+            y = np.asarray(out["midspan_displacement"], float)
+            w[k, j] = np.interp(time, t, y, right=np.nan)
+            if np.isfinite(y).all():
+                wmax[k, j] = float(np.max(y))
+    ds.coords["kernel_reduction"] = ("kernel_reduction", np.array([0, 1]), {
+        "units": "-", "long_name": "003 4.2(2) kernel reduction across fully released mortar "
+        "particles (classic SPH, phi_min = 0.05): 0 without, 1 with"})
+    dims = ("kernel_reduction", "resolution")
+    ds["kr_midspan_displacement"] = (dims + ("time",), w, {
+        "units": "m", "long_name": f"specimen {sp}, sph: mid-span displacement, positive downward"})
+    ds["kr_max_displacement"] = (dims, wmax, {
+        "units": "m", "long_name": f"specimen {sp}, sph: largest mid-span displacement"})
+    ds["kr_status"] = (dims, status.astype(str), {"units": "-"})
 
 
 def _modal(ds, modal: dict) -> None:
@@ -544,6 +594,16 @@ def report_notes(ds: xr.Dataset) -> list[str]:
             row += (f" Validation (not gated): 003 reports about "
                     f"{PAPER[sp]['max_displacement'] * 1e3:g} mm without kernel reduction.")
         notes.append(row)
+    if "kr_max_displacement" in ds:
+        sp = KERNEL_REDUCTION_SPECIMEN
+        for r in ds.resolution.values:
+            a, b = (float(ds.kr_max_displacement.sel(kernel_reduction=k, resolution=r)) for k in (0, 1))
+            if np.isfinite(a) and np.isfinite(b):
+                notes.append(f"{sp}, sph, H/dx = {int(r)}: largest mid-span displacement "
+                             f"{a * 1e3:.3g} mm without the kernel reduction, {b * 1e3:.3g} mm with "
+                             f"it (x{b / a:.2f}). Validation (not gated): 003 reports about "
+                             f"{PAPER[sp]['max_displacement'] * 1e3:g} and "
+                             f"{PAPER[sp]['max_displacement_kernel_reduction'] * 1e3:g} mm (x2).")
     return notes
 
 

@@ -139,7 +139,8 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
 
     scene = RCBeam(t_end=2.5e-4, n_out=50)
     outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
-    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=False)
+    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=False,
+                         kr={8: short_b["sph"]})  # the same run stands in for "with" here
     assert all("units" in ds[v].attrs for v in ds.data_vars)
     for k in ("study", "git_revision", "cpu_count", "param_f_t", "angle_bins"):
         assert k in ds.attrs
@@ -155,6 +156,12 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
         h = short_b[m]["history"]
         assert h.shape[0] == short_b[m]["n_particles"] and np.max(h[:, H_DAMAGE]) > 0
     assert str(ds.status.sel(solver="csph", specimen="A", resolution=8).values) == "not run"
+    # the kernel-reduction dimension of specimen B (sph): without = the main run, with = kr's
+    kr = ds.kr_max_displacement.sel(resolution=8)
+    assert ds.kr_midspan_displacement.dims == ("kernel_reduction", "resolution", "time")
+    assert float(kr.sel(kernel_reduction=0)) == float(ds.max_displacement.sel(solver="sph", **sel))
+    assert float(kr.sel(kernel_reduction=1)) == float(kr.sel(kernel_reduction=0))
+    assert any("kernel reduction" in n for n in rc_beam.report_notes(ds))
     write(ds, tmp_path / "rc_beam.nc")
 
 

@@ -42,8 +42,8 @@ Our choices (all parameters below; ``workbench list`` shows them):
   (``contact_stiffness`` × the steel's E);
 * the release strain is tied to the spacing by eq. 5 (G_F fixed): ε_r(Δx) = ε_r · 5 mm / Δx
   (``scale_release``), so the energy released per crack area does not depend on the spacing;
-* no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) is not
-  part of this scene yet;
+* no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) belongs to
+  the particle method: classic SPH's ``kernel_reduction`` option (:func:`sph.classic.kernel_factors`);
 * ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
 * ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
   contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic
