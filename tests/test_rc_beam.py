@@ -285,3 +285,44 @@ def test_kernel_factors_from_the_released_flag():
     with pytest.raises(ValueError, match="^kernel_reduction"):
         Body(np.zeros((2, 3)), np.ones(2), mortar, 0.01, stress="hypoelastic",
              kernel_reduction=True)
+
+
+# -- the full beam (symmetry=False) against the quarter model -------------------------------------
+@pytest.mark.parametrize("r", [5, 8])
+def test_full_beam_is_the_quarter_model_mirrored(r):
+    """``symmetry=False`` at 20 and 12.5 mm (12.5 mm: x_e = 420 mm is not a lattice multiple, the
+    lattice must still have a node on x = 0 and y = 0): the full beam's particles are the quarter
+    model's mirrored in x = 0 and y = 0 (as sets of positions, per region), every body's mass is
+    four times the quarter's (the plane particles' half volumes become whole), the weight's is
+    the full 100 kg, and there are no symmetry rollers. Closed forms; tolerance round-off."""
+    q, f = RCBeam(), RCBeam(symmetry=False)
+    pq, pf = discretise(driver.model_at(q, r)[0], r), discretise(driver.model_at(f, r)[0], r)
+    assert not driver.model_at(f, r)[0].constraints
+    assert pq.region_names == pf.region_names
+    key = lambda X: {tuple(np.round(p / pq.dx, 6)) for p in X}
+    for k, name in enumerate(pq.region_names):
+        Xq = pq.X[pq.region == k]
+        mirrored = np.concatenate([Xq * s for s in ((1, 1, 1), (-1, 1, 1), (1, -1, 1), (-1, -1, 1))])
+        assert key(pf.X[pf.region == k]) == key(mirrored), name
+        assert pf.m[pf.region == k].sum() == pytest.approx(4 * pq.m[pq.region == k].sum(), rel=1e-12)
+    assert pf.m[pf.in_regions(["weight"])].sum() == pytest.approx(100.0, rel=1e-12)
+    assert f.copies == 1 and q.copies == 4
+
+
+@pytest.mark.xfail(strict=True, reason="issue 12 gate 4 fails: the contact of sph.contact acts per "
+                   "particle pair, not weighted by volume, so the weight-plate and beam-support "
+                   "pairs on a symmetry plane (half particles) push as hard as whole ones: the "
+                   "quarter model's contact is stiffer (A, 20 mm, nodal csph: peak impact force "
+                   "171 kN against the full beam's 137 kN, mid-span displacement 11 % apart over "
+                   "0.5 ms, 5.6 % over 1 ms; 7.4 % at 12.5 mm)")
+def test_quarter_model_matches_the_full_beam():
+    """Issue 12 gate 4: specimen A at 20 mm, nodal csph, the quarter model's mid-span displacement
+    history against the full beam's over the first 0.5 ms within 1 % of the full beam's largest
+    (the issue's bound)."""
+    w = {}
+    for sym in (True, False):
+        out = driver.solve("csph", RCBeam(symmetry=sym, t_end=5e-4, n_out=50), 5,
+                           integration="nodal")
+        w[sym] = (np.asarray(out["time"]), -np.asarray(out["midspan_w"]))
+    (tq, wq), (tf, wf) = w[True], w[False]
+    assert np.max(np.abs(wq - np.interp(tq, tf, wf))) <= 0.01 * np.max(np.abs(wf))
