@@ -54,8 +54,38 @@ from .method import ParticleBody
 from .neighbours import drop_cross_body, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
+_NO_KF = np.ones(1)
+"""The kernel factors passed when there is no kernel reduction (never read)."""
 HYPOELASTIC_LAWS = ("svk", "neo_hooke")
 """Laws whose small-strain λ, μ the hypoelastic (Jaumann) path uses."""
+
+
+# ================================================================================================
+# The kernel reduction of 003 §4.2(2)
+# ================================================================================================
+
+def kernel_factors(table: MaterialTable, mat_id: np.ndarray, hist: np.ndarray,
+                   out: np.ndarray) -> np.ndarray:
+    """003 §4.2(2): "the reduction factor φ is multiplied onto the kernel of the particles at a
+    crack … applied where a particle's tensile strain is excessive (its stress fully released by
+    the tension softening), with the factor's lower bound 0.05". Per particle (N,) into ``out``:
+    the mortar's φ_min (0.05 in 003; :meth:`~workbench.materials.Material.mortar`) where its
+    history's fully-released flag (:data:`workbench.materials.mortar.H_RELEASED`) is set, 1
+    elsewhere (every other law, and virgin or partly released mortar). The pair loops multiply each
+    pair's kernel — in the velocity gradient (eq. 3) and in the forces (eq. 1), stress, artificial
+    stress and viscosity alike — by min(kf_i, kf_j): the interaction across a fully released
+    particle is φ_min times the unreduced one (003 does not say what a pair of two released
+    particles gets; we take φ_min, not φ_min²). The factor is symmetric in i, j, so linear
+    momentum stays conserved."""
+    from workbench.materials.mortar import H_RELEASED
+
+    out[:] = 1.0
+    for k, mt in enumerate(table.materials):
+        if mt.law != "mortar":
+            continue
+        sel = (mat_id == k) & (hist[:, H_RELEASED] >= 0.5)
+        out[sel] = mt.phi_min
+    return out
 
 
 # ================================================================================================
@@ -63,9 +93,10 @@ HYPOELASTIC_LAWS = ("svk", "neo_hooke")
 # ================================================================================================
 
 @njit(inline="always", **JIT)
-def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L):
+def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce):
     """Eq. 3: L_i = Σ_j V_j (v_j − v_i) ⊗ ∇_i W_ij (V_j = m_j/ρ_j, the cubic spline in d = 2 or 3)
-    into the 3×3 L (zero third row and column in 2-D), 1/s."""
+    into the 3×3 L (zero third row and column in 2-D), 1/s. With ``reduce``, each pair's kernel
+    times min(kf_i, kf_j) (:func:`kernel_factors`, the kernel reduction of 003 §4.2(2))."""
     d = x.shape[1]
     for k in range(3):
         for l in range(3):
@@ -83,6 +114,8 @@ def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L):
             if r <= 0.0:
                 continue
             g = dw_dr(r, h, 0, 2) / r * m[j] / rho[j]
+            if reduce:
+                g *= min(kf[i], kf[j])
             dv0 = v[j, 0] - v[i, 0]
             dv1 = v[j, 1] - v[i, 1]
             L00 += dv0 * g * dx0
@@ -103,6 +136,8 @@ def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L):
         if r <= 0.0:
             continue
         g = dw_dr(r, h, 0, d) / r * m[j] / rho[j]
+        if reduce:
+            g *= min(kf[i], kf[j])
         for k in range(d):
             dvk = (v[j, k] - v[i, k]) * g
             for l in range(d):
@@ -219,9 +254,18 @@ def artificial_stress_row(i, sigma, rho_i, eps_as, d, R, a, V):
                     R[i, k, l] += r * V[k, e] * V[l, e]
 
 
-@njit(parallel=True, **JIT)
 def rates_pass(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu, hyper, prm,
-               mat_id, hist, hist_new, eps_as, status, R):
+               mat_id, hist, hist_new, eps_as, status, R, kf=None):
+    """Step 3 (:func:`rates_kernel`); ``kf`` (N,) or None: the kernel factors of the kernel
+    reduction (:func:`kernel_factors`), None: none (the unreduced pair loop)."""
+    reduce = kf is not None
+    rates_kernel(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu, hyper, prm,
+                 mat_id, hist, hist_new, eps_as, status, R, kf if reduce else _NO_KF, reduce)
+
+
+@njit(parallel=True, **JIT)
+def rates_kernel(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu, hyper, prm,
+                 mat_id, hist, hist_new, eps_as, status, R, kf, reduce):
     """Step 3 of the module docstring for every particle, in place: the velocity gradient (eq. 3),
     the new density into ``rho_new`` (eq. 2; ``rho`` is read by the neighbours, so it is not
     overwritten), the stress — hypoelastic (Jaumann, λ (N,), μ (N,) per particle, Pa) or, with
@@ -237,7 +281,7 @@ def rates_pass(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu,
         P = np.empty((3, 3))
         A = np.empty((3, 3, 3, 3))
         for i in range(c * chunk, min(N, (c + 1) * chunk)):
-            velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L)
+            velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce)
             rho_new[i] = rho[i] * (1.0 - dt * (L[0, 0] + L[1, 1] + L[2, 2]))
             if hyper:
                 status[i] = hyperelastic_update(F[i], L, dt, hist[i], prm[mat_id[i]], hist_new[i],
@@ -255,7 +299,8 @@ def rates_pass(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, mu,
 # ================================================================================================
 
 @njit(inline="always", **JIT)
-def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx):
+def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, kf,
+                  reduce):
     """2-D specialisation of :func:`force_row`, returning (a_x, a_y)."""
     ax = 0.0
     ay = 0.0
@@ -273,6 +318,8 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
         if r <= 0.0:
             continue
         g = dw_dr(r, h, 0, 2) / r
+        if reduce:
+            g *= min(kf[i], kf[j])
         gx = g * dx0
         gy = g * dx1
         rj2 = 1.0 / (rho[j] * rho[j])
@@ -299,9 +346,11 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
 
 
 @njit(inline="always", **JIT)
-def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, out):
+def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, out, kf,
+              reduce):
     """Eq. 1 for particle i, any d:
-    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij into out[i] (d,), m/s²."""
+    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij into out[i] (d,), m/s²; with
+    ``reduce`` each pair's kernel times min(kf_i, kf_j) (:func:`kernel_factors`)."""
     d = x.shape[1]
     for k in range(d):
         out[i, k] = 0.0
@@ -318,6 +367,8 @@ def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
         if r <= 0.0:
             continue
         g = m[j] * dw_dr(r, h, 0, d) / r
+        if reduce:
+            g *= min(kf[i], kf[j])
         rj2 = 1.0 / (rho[j] * rho[j])
         f = (kernel_w(r, h, 0, d) / w_dx) ** n_as if n_as > 0 else 0.0
         pi_ij = 0.0
@@ -336,9 +387,19 @@ def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
             out[i, k] += g * s
 
 
-@njit(parallel=True, **JIT)
 def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
-               acc, fixed, v_fix, dt, damping, do_kick):
+               acc, fixed, v_fix, dt, damping, do_kick, kf=None):
+    """Step 4–5 (:func:`force_kernel`); ``kf`` (N,) or None as in :func:`rates_pass`. Returns the
+    number of non-finite accelerations."""
+    reduce = kf is not None
+    return force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx,
+                        a_ext, acc, fixed, v_fix, dt, damping, do_kick,
+                        kf if reduce else _NO_KF, reduce)
+
+
+@njit(parallel=True, **JIT)
+def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
+                 acc, fixed, v_fix, dt, damping, do_kick, kf, reduce):
     """Accelerations (N, d) into ``acc`` (eq. 1 plus a_ext (N, d), m/s²; c (N,) the particles'
     P-wave speeds, m/s) and, with ``do_kick``, the closing half kick (step 4–5). The kick is a
     separate loop: the viscosity reads the neighbours' velocities, which must not be kicked while
@@ -348,12 +409,12 @@ def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as,
     for i in prange(N):
         if d == 2:
             ax, ay = _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
-                                   n_as, w_dx)
+                                   n_as, w_dx, kf, reduce)
             acc[i, 0] = ax + a_ext[i, 0]
             acc[i, 1] = ay + a_ext[i, 1]
         else:
             force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx,
-                      acc)
+                      acc, kf, reduce)
             for k in range(d):
                 acc[i, k] += a_ext[i, k]
         ok = True
@@ -408,11 +469,13 @@ class Body:
     ``mat_id`` (N,) its row per particle (the particle's density ρ0, wave speed, λ and μ or law);
     dx spacing, m; options: ``h_ratio`` (h/Δx), ``stress`` ('hypoelastic' | 'hyperelastic'),
     ``alpha``, ``beta`` (artificial viscosity), ``artificial_stress`` (ε of Gray et al., 0 = off),
-    ``n_as`` (exponent, 4); ``damping`` mass-proportional, 1/s."""
+    ``n_as`` (exponent, 4); ``damping`` mass-proportional, 1/s; ``kernel_reduction``: the kernel
+    reduction of 003 §4.2(2) across fully released mortar particles (:func:`kernel_factors`;
+    needs ``stress='hyperelastic'``, the mortar's path)."""
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
                  artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
-                 viscous_work=False):
+                 viscous_work=False, kernel_reduction=False):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
@@ -423,6 +486,9 @@ class Body:
             raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie "
                              "in [0, 1]")
         table = MaterialTable.of(material)
+        if kernel_reduction and stress != "hyperelastic":
+            raise ValueError("kernel_reduction: True needs stress='hyperelastic' (the mortar's "
+                             "history); allowed: False, or True with the hyperelastic stress")
         if stress == "hypoelastic":
             for mt in table.materials:
                 if mt.law not in HYPOELASTIC_LAWS:
@@ -479,6 +545,7 @@ class Body:
         self.viscous_work = 0.0  # energy dissipated by the artificial viscosity so far, J
         self.impulse = None  # (N, d) or None: the impulse of the force on each fixed DOF is added
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
+        self.kf = np.ones(N) if kernel_reduction else None  # the kernel factors, or None: off
         self._accelerations(0.0, kick=False)
 
     @property
@@ -504,10 +571,12 @@ class Body:
 
     def _accelerations(self, dt, kick):
         self.indptr, self.indices = self._neighbours(self.x)
+        if self.kf is not None:
+            kernel_factors(self.table, self.mat_id, self.hist, self.kf)
         return force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
                           self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
                           self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
-                          self.damping, kick)
+                          self.damping, kick, self.kf)
 
     def step(self, dt: float, n: int = 1) -> int:
         """``n`` steps of size dt; returns the steps completed (fewer if the state became
@@ -527,14 +596,16 @@ class Body:
             rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
                        self.indptr, self.indices, self.h, dt, self.lam, self.mu, self.hyper,
                        self.prm, self.mat_id, self.hist, self.hist_new, self.eps_as, self.status,
-                       self.R)
+                       self.R, self.kf)
             self.rho, self.rho_new = self.rho_new, self.rho
             if self.hist.shape[1]:
                 self.hist, self.hist_new = self.hist_new, self.hist
+            if self.kf is not None:  # the particles released by this step's history
+                kernel_factors(self.table, self.mat_id, self.hist, self.kf)
             bad = force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
                              self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
                              self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
-                             self.damping, True)
+                             self.damping, True, self.kf)
             if fx is not None:
                 self.impulse.ravel()[fx] += 0.5 * dt * (f_old + self.acc.ravel()[fx] * m_fx)
             if self.track_viscous:
@@ -553,7 +624,7 @@ class Body:
         indptr, indices = self._neighbours(self.x)
         force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, indptr, indices, self.h,
                    self.c, self.alpha, self.beta, self.n_as, self.w_dx, np.zeros_like(self.acc),
-                   acc, self.fixed, self.v_fix, 0.0, 0.0, False)
+                   acc, self.fixed, self.v_fix, 0.0, 0.0, False, self.kf)
         return acc * self.m[:, None]
 
     def energies(self) -> tuple[float, float]:
@@ -584,7 +655,9 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 
                alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
                artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)",
                viscous_work="track the energy the artificial viscosity dissipates (default False: "
-                            "one more pair loop per step)")
+                            "one more pair loop per step)",
+               kernel_reduction="003 4.2(2): kernels across fully released mortar particles x "
+                                "phi_min (default False; needs stress='hyperelastic')")
 
 
 class Classic(ParticleBody):
@@ -596,7 +669,7 @@ class Classic(ParticleBody):
 
     def __init__(self, particles, h_ratio: float = 1.3, stress: str = "hypoelastic",
                  alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
-                 n_as: int = 4, viscous_work: bool = False):
+                 n_as: int = 4, viscous_work: bool = False, kernel_reduction: bool = False):
         super().__init__(particles)
         ps = particles
         if ps.plane == "stress":
@@ -604,7 +677,8 @@ class Classic(ParticleBody):
                              "allowed: 'strain' or a 3-D model")
         self.b = Body(ps.X, ps.V, ps.table, ps.dx, h_ratio, stress, alpha, beta,
                       artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
-                      mat_id=ps.mat_id, viscous_work=viscous_work)
+                      mat_id=ps.mat_id, viscous_work=viscous_work,
+                      kernel_reduction=kernel_reduction)
         self.b.impulse = self.impulse
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc

@@ -41,9 +41,10 @@ compilation; static: cumulative at each load value), ``setup_time`` (discretisat
 build, loads), ``jit_time`` (:func:`jit_estimate`), ``total_time`` (the whole call), ``loop_time``
 (explicit: the time loop alone, JIT included), ``n_particles``, ``dt``, ``steps``, the final state
 (explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``sets`` name →
-indices, ``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the
-connected parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and
-the scene's quantities.
+indices, ``history`` the final material history (rows as the body's field state),
+``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the connected
+parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and the scene's
+quantities.
 """
 from __future__ import annotations
 
@@ -547,7 +548,8 @@ class Run:
         # the final state: reference and current positions, regions, and the failed particles
         out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
                    region_names=list(ps.region_names),
-                   sets={k: np.asarray(v).copy() for k, v in ps.sets.items()})
+                   sets={k: np.asarray(v).copy() for k, v in ps.sets.items()},
+                   history=np.array(body.field_state().get("history", np.zeros((ps.n, 0)))))
         parts = body.components()
         if parts is not None:
             out["component"] = np.asarray(parts)

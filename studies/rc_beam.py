@@ -4,14 +4,15 @@ Paper 003, §2 and §4; the scene is :class:`workbench.scenes.RCBeam` (its readi
 and its choices in :mod:`workbench.scenes.rc_beam`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
 failure) and B (400 mm, 1.4 m/s, shear failure), classic SPH (``sph``, the paper's method, with
 the hyperelastic stress path the mortar needs) and CSPH (``csph``, nodal integration: the
-integration-consistent correction is unstable on this scene at the CFL step, issue 13) side by side.
+integration-consistent correction's critical step is 0.2 of the CFL estimate here) side by side.
 
 Stored per specimen, solver and resolution (``rc_beam.nc``; forces and energies are the full
 beam's, four times the quarter model's): histories of the mid-span displacement, the impact force,
 the support reaction, the energies (kinetic, stored elastic with the contact's, plastic work,
 released by cracking, dissipated by sph's artificial viscosity, external work), the z momentum of
 weight plus beam and the impulse the supports gave; the largest and the residual mid-span
-displacement; the cracked fraction of the mortar by crack orientation (:func:`crack_orientation`).
+displacement; the cracked fraction of the mortar by crack orientation (:func:`crack_orientation`:
+the principal direction of the mortar's damage tensor, from the driver's final history).
 
 Gates (:func:`gates`), each tolerance with its reason beside it: the elastic phase (issue 12
 gate 2) — the first flexural frequency of the beam with its rebar on hinges, csph's modal drive
@@ -45,13 +46,19 @@ SPECIMENS = ("A", "B")
 OPTIONS = {"sph": dict(stress="hyperelastic", viscous_work=True), "csph": dict(integration="nodal")}
 """Solver options: sph needs the hyperelastic stress path for the mortar and J2 steel, and tracks
 its artificial viscosity's dissipation for the energy balance; csph runs with nodal integration
-(the integration-consistent correction fails a material point within ~20 steps at the CFL step on
-this scene: tests/test_rc_beam.py, issue 13)."""
+(the integration-consistent correction is stable only below 0.20 Δx/c_p on specimen A at 12.5 mm,
+its critical step 2/ω_max: at 0.9 of it, ``dt_reference='spectrum'``, it runs, at about 4 times the
+cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
 RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
 """Particles across H = 100 mm: 12.5, 10 and 5 mm (the paper's). 20 mm (resolution 5) is not on
 the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within
 0.2 ms at any time-step factor (measured at 0.1 and 0.3)."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
+KERNEL_REDUCTION_SPECIMEN = "B"
+"""The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
+released mortar particles × φ_min = 0.05): 003 runs it on specimen B, whose largest displacement it
+doubles. A full run adds sph on B with it at every resolution (the ``kernel_reduction`` dimension
+of the ``kr_*`` variables); ``--quick`` does not."""
 QUICK_T_END = 5e-4
 """``--quick``: the first 0.5 ms (the first contact pulse and the start of the bending), 12.5 mm."""
 N_TIME = 201
@@ -163,6 +170,12 @@ def run(scene: RCBeam | None = None, solvers=None, resolutions=None, quick: bool
                     opts["fields"] = str(fields)
                 tasks.append(Task.make(s, sc, r, **opts))
                 keys.append((s, sp, r))
+    kr_keys = []
+    if "sph" in solvers and not quick:
+        sc = scene_for(scene, KERNEL_REDUCTION_SPECIMEN, quick)
+        for r in lad["sph"]:
+            tasks.append(Task.make("sph", sc, r, **OPTIONS["sph"], kernel_reduction=True))
+            kr_keys.append(r)
     modal_keys = []
     if "csph" in solvers:
         for sp in MODAL_SPECIMENS[bool(quick)]:
@@ -173,9 +186,10 @@ def run(scene: RCBeam | None = None, solvers=None, resolutions=None, quick: bool
                 modal_keys.append((s, sp))
     done = run_tasks(tasks, scheduler, NAME)
     outs = dict(zip(keys, done[:len(keys)]))
-    modal = dict(zip(modal_keys, done[len(keys):]))
+    kr = dict(zip(kr_keys, done[len(keys):len(keys) + len(kr_keys)]))
+    modal = dict(zip(modal_keys, done[len(keys) + len(kr_keys):]))
     res = sorted({r for v in lad.values() for r in v})
-    ds = dataset(scene, outs, solvers, res, quick, modal)
+    ds = dataset(scene, outs, solvers, res, quick, modal, kr)
     if fields is not None:
         from .common import field_series
 
@@ -204,26 +218,64 @@ def energy_error(out: dict) -> np.ndarray:
     return (bal - bal[0]) / float(out["kinetic_energy"][0])
 
 
-def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray) -> dict:
+CRACK_DAMAGE = 1.0 - 1e-6
+"""A mortar particle is cracked where the largest eigenvalue of its damage tensor Ω reaches 1: a
+direction with φ = 0, its normal stress fully released (an open crack, :mod:`workbench.materials.mortar`;
+the same criterion as the strain stand-in's principal strain above ε_0). The margin: Ω is raised
+to exactly 1 along a principal direction; round-off of the eigen-analysis only."""
+
+
+def damage_tensors(history: np.ndarray) -> np.ndarray:
+    """The mortar's damage tensors Ω (n, 3, 3) from its history rows (n, ≥ 23): columns
+    :data:`workbench.materials.mortar.H_OMEGA` … +5 in the order xx, yy, zz, yz, xz, xy."""
+    from workbench.materials.mortar import H_OMEGA
+
+    v = np.asarray(history, float)[:, H_OMEGA:H_OMEGA + 6]
+    Om = np.empty((len(v), 3, 3))
+    Om[:, 0, 0], Om[:, 1, 1], Om[:, 2, 2] = v[:, 0], v[:, 1], v[:, 2]
+    Om[:, 1, 2] = Om[:, 2, 1] = v[:, 3]
+    Om[:, 0, 2] = Om[:, 2, 0] = v[:, 4]
+    Om[:, 0, 1] = Om[:, 1, 0] = v[:, 5]
+    return Om
+
+
+def crack_classes(cracked: np.ndarray, direction: np.ndarray) -> tuple:
+    """(angle (n,) degrees, fraction {class: cracked particles of that class over all n}): the
+    angle θ = arccos |n_x| of each opening direction n (n, 3) from the span x, binned by
+    :data:`ANGLE_BINS` (the last bin closed at 90°)."""
+    ang = np.degrees(np.arccos(np.clip(np.abs(direction[:, 0]), 0.0, 1.0)))
+    frac = {}
+    for name, (lo, hi) in ANGLE_BINS.items():
+        sel = cracked & (ang >= lo) & ((ang < hi) if hi < 90 else (ang <= hi))
+        frac[name] = float(np.count_nonzero(sel) / max(1, len(ang)))
+    return ang, frac
+
+
+def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray,
+                      history: np.ndarray | None = None) -> dict:
     """The cracked mortar of a final state by orientation.
 
-    The driver returns the final positions, not the mortar's damage tensor, so the crack is read
-    from the deformation: the residual Green–Lagrange strain E = ½(FᵀF − I) of each mortar
-    particle, F by csph's corrected (Bonet–Lok) gradients on the reference neighbours of the
-    beam (:func:`sph.csph.discretise`, :func:`sph.total_lagrangian.deformation_gradients`); a
-    particle is cracked where its largest principal strain exceeds the release strain ε_0(Δx) of
-    the mortar at this spacing (:meth:`RCBeam.release_strain`: the stress along that direction is
-    fully released — an open crack; the cracking strain f_t/E_m, 1.35e-4, is exceeded almost
-    everywhere in a beam deflected by centimetres, Poisson's lateral strain included), its crack
-    opening along that principal direction n; the angle θ = arccos |n_x| (degrees) from the span is binned by
-    :data:`ANGLE_BINS`. Returns ``X`` (n, 3) reference positions of the mortar particles, m;
-    ``strain`` (n,) largest principal strain; ``release_strain`` ε_0(Δx); ``direction`` (n, 3); ``angle`` (n,) degrees;
+    From the damage (``history``, the driver's final material history, rows as the particles):
+    the damage tensor Ω of each mortar particle (:func:`damage_tensors`), its largest eigenvalue ω
+    and principal direction m — the normal of the most released direction, the crack opening; a
+    particle is cracked where ω ≥ :data:`CRACK_DAMAGE` (fully released). Without a history (or
+    with one that is not the mortar's) the stand-in from the deformation: the residual
+    Green–Lagrange strain E = ½(FᵀF − I) of each mortar particle, F by csph's corrected
+    (Bonet–Lok) gradients on the reference neighbours of the beam (:func:`sph.csph.discretise`,
+    :func:`sph.total_lagrangian.deformation_gradients`), cracked where its largest principal strain
+    exceeds the release strain ε_0(Δx) (:meth:`RCBeam.release_strain`), opening along that
+    principal direction. The stand-in's strain is computed in both cases (``strain``,
+    ``strain_fraction``). The opening direction's angle from the span is binned by
+    :data:`ANGLE_BINS` (:func:`crack_classes`). Returns ``X`` (n, 3) reference positions of the
+    mortar particles, m; ``strain`` (n,) largest principal strain; ``release_strain`` ε_0(Δx);
+    ``damage`` (n,) ω (NaN without a history); ``direction`` (n, 3); ``angle`` (n,) degrees;
     ``cracked`` (n,) bool; ``fraction`` {class: cracked particles of that class over all mortar
-    particles}."""
+    particles}; ``strain_fraction`` the stand-in's; ``measure`` 'damage' or 'strain'."""
     from sph import total_lagrangian as tl
     from sph.csph import discretise as csph_discretise
     from sph.driver import model_at
     from sph.particles import discretise
+    from workbench.materials.mortar import N_HISTORY
 
     model, _ = model_at(scene, resolution)
     ps = discretise(model, resolution)
@@ -236,21 +288,29 @@ def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray) -> dict:
     e1, n1 = w[:, -1], v[:, :, -1]
     mortar = ps.region[idx] == ps.region_names.index("mortar")
     e1, n1, X = e1[mortar], n1[mortar], ps.X[idx][mortar]
-    ang = np.degrees(np.arccos(np.clip(np.abs(n1[:, 0]), 0.0, 1.0)))
-    cracked = e1 > scene.release_strain(ps.dx)
-    frac = {}
-    for name, (lo, hi) in ANGLE_BINS.items():
-        sel = cracked & (ang >= lo) & ((ang < hi) if hi < 90 else (ang <= hi))
-        frac[name] = float(np.count_nonzero(sel) / max(1, len(e1)))
-    return dict(X=X, strain=e1, direction=n1, angle=ang, cracked=cracked, fraction=frac,
-                release_strain=scene.release_strain(ps.dx))
+    eps0 = scene.release_strain(ps.dx)
+    strain_cracked = e1 > eps0
+    ang, sfrac = crack_classes(strain_cracked, n1)
+    out = dict(X=X, strain=e1, release_strain=eps0, damage=np.full(len(e1), np.nan),
+               direction=n1, angle=ang, cracked=strain_cracked, fraction=sfrac,
+               strain_fraction=sfrac, measure="strain")
+    h = None if history is None else np.asarray(history, float)
+    if h is not None and h.ndim == 2 and h.shape[0] == ps.n and h.shape[1] >= N_HISTORY:
+        wd, vd = np.linalg.eigh(damage_tensors(h[idx][mortar]))
+        om, m1 = wd[:, -1], vd[:, :, -1]
+        cracked = om >= CRACK_DAMAGE
+        ang, frac = crack_classes(cracked, m1)
+        out.update(damage=om, direction=m1, angle=ang, cracked=cracked, fraction=frac,
+                   measure="damage")
+    return out
 
 
 def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
     nan = math.nan
     s = dict(max_displacement=nan, residual_displacement=nan, max_impact_force=nan,
              max_support_reaction=nan, energy_balance_error=nan, momentum_error=nan,
-             **{f"cracked_{k}": nan for k in ANGLE_BINS})
+             **{f"cracked_{k}": nan for k in ANGLE_BINS},
+             **{f"strain_cracked_{k}": nan for k in ANGLE_BINS})
     if len(out.get("time", ())) < 3:
         return s
     t = np.asarray(out["time"])
@@ -264,8 +324,9 @@ def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
              energy_balance_error=float(np.max(np.abs(energy_error(out)))),
              momentum_error=momentum_error(out))
     if "x" in out and np.isfinite(out["x"]).all():
-        c = crack_orientation(scene, resolution, np.asarray(out["x"]))
+        c = crack_orientation(scene, resolution, np.asarray(out["x"]), out.get("history"))
         s.update({f"cracked_{k}": v for k, v in c["fraction"].items()})
+        s.update({f"strain_cracked_{k}": v for k, v in c["strain_fraction"].items()})
     return s
 
 
@@ -278,15 +339,23 @@ SCALARS = dict(max_displacement=("m", "largest mid-span displacement"),
                energy_balance_error=("-", "max over time |initial KE - (K + E + contact + W_p + "
                                      "W_rel + viscous)| / initial KE"),
                momentum_error=("-", "max over time |p_z - p_z(0) - support impulse| / |p_z(0)|"),
-               **{f"cracked_{k}": ("-", f"mortar particles with an open crack (residual strain "
-                                   f"above the release strain) opening {lo:g}-{hi:g} deg from "
-                                   "the span, over all mortar particles")
-                  for k, (lo, hi) in ANGLE_BINS.items()})
+               **{f"cracked_{k}": ("-", f"mortar particles with an open crack (a fully "
+                                   "released direction: the damage tensor's largest eigenvalue "
+                                   "1; without a history the residual strain above the release "
+                                   f"strain) opening {lo:g}-{hi:g} deg from the span, over all "
+                                   "mortar particles")
+                  for k, (lo, hi) in ANGLE_BINS.items()},
+               **{f"strain_cracked_{k}": ("-", "the residual-strain stand-in of cracked_"
+                                          f"{k} (largest principal residual strain above the "
+                                          "release strain, along it)")
+                  for k in ANGLE_BINS})
 
 
-def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None) -> xr.Dataset:
-    """The study's dataset from the runs ``outs`` {(solver, specimen, resolution): driver output}
-    and the modal runs ``modal`` {(csph | fem, specimen): output} of gate 2."""
+def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None,
+            kr: dict | None = None) -> xr.Dataset:
+    """The study's dataset from the runs ``outs`` {(solver, specimen, resolution): driver output},
+    the modal runs ``modal`` {(csph | fem, specimen): output} of gate 2 and classic SPH's runs with
+    the kernel reduction ``kr`` {resolution: output} (specimen :data:`KERNEL_REDUCTION_SPECIMEN`)."""
     t_end = min(scene.t_end, QUICK_T_END) if quick else scene.t_end
     time = np.linspace(0.0, t_end, N_TIME)
     dims = ("solver", "specimen", "resolution")
@@ -324,7 +393,7 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
         for k, v in run_summary(out, sc, r).items():
             scal[k][idx] = v
         if r == max(res) and "x" in out and np.isfinite(out["x"]).all():
-            cracks[(s, sp)] = crack_orientation(sc, r, np.asarray(out["x"]))
+            cracks[(s, sp)] = crack_orientation(sc, r, np.asarray(out["x"]), out.get("history"))
     data = {n: (dims + ("time",), series[n], {"units": u, "long_name": ln})
             for n, (_, u, ln, _) in SERIES.items()}
     data["energy_error"] = (dims + ("time",), extra["energy_error"], {
@@ -352,21 +421,58 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
     ds = xr.Dataset(data, coords=coords)
     _crack_particles(ds, cracks, solvers)
     _modal(ds, modal or {})
+    _kernel_reduction(ds, outs, kr or {}, res, time)
     ds.attrs.update(results.provenance(NAME, scene))
     ds.attrs.update(
         plane="none (3-D)", quick=int(quick),
         options="; ".join(f"{s}: {OPTIONS[s]}" for s in solvers),
         angle_bins="; ".join(f"{k}: {lo:g}-{hi:g} deg" for k, (lo, hi) in ANGLE_BINS.items()),
-        crack_measure="largest principal residual Green-Lagrange strain above the release strain "
-                      "eps_release(dx) (F by csph's "
-                      "corrected gradients on the reference neighbours; the driver does not return "
-                      "the damage tensor); the opening direction its principal direction",
+        crack_measure="the mortar's damage tensor from the final history: cracked where its "
+                      "largest eigenvalue reaches 1 (fully released), the opening direction its "
+                      "principal direction; strain_cracked_*: the stand-in, the largest principal "
+                      "residual Green-Lagrange strain above the release strain eps_release(dx) (F "
+                      "by csph's corrected gradients on the reference neighbours)",
         model="quarter model by two symmetry planes; forces and energies x 4 (the full beam)",
         paper_B_max_displacement=PAPER["B"]["max_displacement"],
         paper_B_max_displacement_kernel_reduction=PAPER["B"]["max_displacement_kernel_reduction"],
         paper_note="003 gives A's displacement history only in Fig. 17 (no number in the text); "
-                   "the kernel reduction of 003 4.2(2) is not modelled")
+                   "the kernel reduction of 003 4.2(2): classic SPH's kernel_reduction option, "
+                   "specimen B in a full run (kr_* variables)")
     return ds
+
+
+def _kernel_reduction(ds, outs: dict, kr: dict, res, time) -> None:
+    """Classic SPH on specimen :data:`KERNEL_REDUCTION_SPECIMEN` without (the main runs) and with
+    the kernel reduction of 003 §4.2(2): the ``kernel_reduction`` dimension (0: without, 1: with)
+    of the mid-span displacement history, its largest value and the run status."""
+    if not kr:
+        return
+    sp = KERNEL_REDUCTION_SPECIMEN
+    w = np.full((2, len(res), len(time)), np.nan)
+    wmax = np.full((2, len(res)), np.nan)
+    status = np.full((2, len(res)), "not run", dtype=object)
+    for k, runs in enumerate(({r: outs.get(("sph", sp, r)) for r in res}, kr)):
+        for r, out in runs.items():
+            if out is None or r not in res:
+                continue
+            j = res.index(r)
+            status[k, j] = str(out.get("status", "error: no status"))
+            t = np.asarray(out.get("time", ()), float)
+            if len(t) < 2:
+                continue
+            y = np.asarray(out["midspan_displacement"], float)
+            w[k, j] = np.interp(time, t, y, right=np.nan)
+            if np.isfinite(y).all():
+                wmax[k, j] = float(np.max(y))
+    ds.coords["kernel_reduction"] = ("kernel_reduction", np.array([0, 1]), {
+        "units": "-", "long_name": "003 4.2(2) kernel reduction across fully released mortar "
+        "particles (classic SPH, phi_min = 0.05): 0 without, 1 with"})
+    dims = ("kernel_reduction", "resolution")
+    ds["kr_midspan_displacement"] = (dims + ("time",), w, {
+        "units": "m", "long_name": f"specimen {sp}, sph: mid-span displacement, positive downward"})
+    ds["kr_max_displacement"] = (dims, wmax, {
+        "units": "m", "long_name": f"specimen {sp}, sph: largest mid-span displacement"})
+    ds["kr_status"] = (dims, status.astype(str), {"units": "-"})
 
 
 def _modal(ds, modal: dict) -> None:
@@ -402,15 +508,21 @@ def _crack_particles(ds, cracks: dict, solvers) -> None:
     X = np.full(shp + (3,), np.nan)
     nvec = np.full(shp + (3,), np.nan)
     strain = np.full(shp, np.nan)
+    damage = np.full(shp, np.nan)
     for (s, sp), c in cracks.items():
         i, j, k = solvers.index(s), SPECIMENS.index(sp), len(c["X"])
         X[i, j, :k], nvec[i, j, :k], strain[i, j, :k] = c["X"], c["direction"], c["strain"]
+        damage[i, j, :k] = c["damage"]
     ds["mortar_X"] = (("solver", "specimen", "particle", "axis"), X, {
         "units": "m", "long_name": "reference positions of the mortar particles, finest run (NaN: padding)"})
     ds["mortar_strain"] = (("solver", "specimen", "particle"), strain, {
         "units": "-", "long_name": "largest principal residual strain at the end of the run"})
+    ds["mortar_damage"] = (("solver", "specimen", "particle"), damage, {
+        "units": "-", "long_name": "largest eigenvalue of the damage tensor at the end of the run "
+        "(NaN: no history)"})
     ds["mortar_opening"] = (("solver", "specimen", "particle", "axis"), nvec, {
-        "units": "-", "long_name": "its principal direction (the crack opening)"})
+        "units": "-", "long_name": "the crack opening direction: the damage tensor's principal "
+        "direction (the residual strain's without a history)"})
 
 
 # -- gates, rows, figures -----------------------------------------------------------------------
@@ -482,6 +594,16 @@ def report_notes(ds: xr.Dataset) -> list[str]:
             row += (f" Validation (not gated): 003 reports about "
                     f"{PAPER[sp]['max_displacement'] * 1e3:g} mm without kernel reduction.")
         notes.append(row)
+    if "kr_max_displacement" in ds:
+        sp = KERNEL_REDUCTION_SPECIMEN
+        for r in ds.resolution.values:
+            a, b = (float(ds.kr_max_displacement.sel(kernel_reduction=k, resolution=r)) for k in (0, 1))
+            if np.isfinite(a) and np.isfinite(b):
+                notes.append(f"{sp}, sph, H/dx = {int(r)}: largest mid-span displacement "
+                             f"{a * 1e3:.3g} mm without the kernel reduction, {b * 1e3:.3g} mm with "
+                             f"it (x{b / a:.2f}). Validation (not gated): 003 reports about "
+                             f"{PAPER[sp]['max_displacement'] * 1e3:g} and "
+                             f"{PAPER[sp]['max_displacement_kernel_reduction'] * 1e3:g} mm (x2).")
     return notes
 
 
@@ -546,9 +668,10 @@ def plot(ds: xr.Dataset, outdir) -> list:
 
 def crack_figure(ds: xr.Dataset, path):
     """The cracked beams (as Fig. 16 and 19 of 003): the mortar particles of the finest run in the
-    symmetry plane y = 0, at their reference positions, coloured by the largest residual principal
-    strain over the release strain at that spacing (clipped to [0, 2]), the crack line drawn where
-    it exceeds it (an open crack, :func:`crack_orientation`)."""
+    symmetry plane y = 0, at their reference positions, coloured by the damage (the damage
+    tensor's largest eigenvalue; without a history the largest residual principal strain over the
+    release strain at that spacing, clipped to [0, 2]), the crack line — perpendicular to the
+    principal damage direction — drawn where the particle is cracked (:func:`crack_orientation`)."""
     import matplotlib.pyplot as plt
 
     from .figures import save
@@ -563,14 +686,19 @@ def crack_figure(ds: xr.Dataset, path):
             ax = axes[i, j]
             X = ds.mortar_X.sel(solver=s, specimen=sp).values
             e = ds.mortar_strain.sel(solver=s, specimen=sp).values
+            d = (ds.mortar_damage.sel(solver=s, specimen=sp).values if "mortar_damage" in ds
+                 else np.full_like(e, np.nan))
             n = ds.mortar_opening.sel(solver=s, specimen=sp).values
             ok = np.isfinite(e) & (np.abs(X[:, 1]) < 1e-9)
             if not ok.any():
                 ax.set_axis_off()
                 continue
-            sc = ax.scatter(X[ok, 0] * 1e3, X[ok, 2] * 1e3, c=np.clip(e[ok] / eps_cr, 0, 2),
-                            cmap="magma_r", s=10, vmin=0, vmax=2)
-            cr = ok & (e > eps_cr)
+            if np.isfinite(d[ok]).all():
+                c, vmax, label, cr = d[ok], 1.0, "damage", ok & (d >= CRACK_DAMAGE)
+            else:
+                c, vmax, label, cr = np.clip(e[ok] / eps_cr, 0, 2), 2.0, "strain / release strain", ok & (e > eps_cr)
+            sc = ax.scatter(X[ok, 0] * 1e3, X[ok, 2] * 1e3, c=c, cmap="magma_r", s=10, vmin=0,
+                            vmax=vmax)
             # the crack line: perpendicular to the opening, in the x-z plane
             ax.quiver(X[cr, 0] * 1e3, X[cr, 2] * 1e3, -n[cr, 2], n[cr, 0], angles="xy",
                       pivot="middle", headwidth=0, headlength=0, headaxislength=0, scale=40,
@@ -579,5 +707,5 @@ def crack_figure(ds: xr.Dataset, path):
             ax.set_title(f"{sp}, {s} (crack lines blue)", fontsize=9)
             ax.set_xlabel("x from mid-span [mm]")
             ax.set_ylabel("z [mm]")
-            fig.colorbar(sc, ax=ax, shrink=0.7, label="strain / release strain")
+            fig.colorbar(sc, ax=ax, shrink=0.7, label=label)
     return save(fig, path)

@@ -1,6 +1,7 @@
 """The reinforced mortar beam of 003 (workbench/scenes/rc_beam.py): bad input, the quarter model's
 particles against closed forms, and a short coarse impact through the particle driver (momentum
 through the first contact, contact forces equal and opposite, no NaN)."""
+import dataclasses
 import math
 
 import numpy as np
@@ -130,11 +131,198 @@ def test_short_impact_conserves_momentum(method, options):
         assert np.all(np.isfinite(out[k]))
 
 
-@pytest.mark.xfail(strict=True, reason="integration-consistent CSPH on specimen A (bars and stirrups "
-                   "on lattice lines) fails a material point (J <= 0) within ~20 steps at the CFL "
-                   "time step: its highest frequency exceeds the CFL estimate here (dt_factor 0.1 "
-                   "runs at 12.5 and 20 mm; at 5 mm even 0.03 fails; integration='nodal' runs at 0.3)")
-def test_consistent_csph_stable_at_the_cfl_time_step():
-    s = RCBeam(t_end=2e-5, n_out=5)
-    out = driver.solve("csph", s, 8)
-    assert out["status"] == "ok"
+@pytest.fixture(scope="module")
+def consistent_a():
+    """Integration-consistent csph (the default) on specimen A at 12.5 mm for 0.1 ms with the time
+    step a factor times its own critical step 2/ω_max (``dt_reference='spectrum'``,
+    :mod:`sph.spectrum`): 0.9 and 1.2. Also the CFL estimate Δx/c_p of the same body."""
+    from sph.driver import method_entry, model_at
+
+    s = RCBeam(t_end=1e-4, n_out=10, dt_reference="spectrum")
+    runs = {f: driver.solve("csph", dataclasses.replace(s, dt_factor=f), 8) for f in (0.9, 1.2)}
+    mod, defaults = method_entry("csph")
+    model, _ = model_at(s, 8)
+    dt_cfl = mod.build(discretise(model, 8), **defaults).time_step(1.0)
+    return runs, dt_cfl
+
+
+def test_consistent_csph_is_stable_below_its_critical_step(consistent_a):
+    """The failure of integration-consistent csph at the CFL step (dt_factor 0.3) on this scene is
+    the CFL estimate's, not the method's: its critical step 2/ω_max is 0.20 Δx/c_p here (the bars'
+    and stirrups' stiff equivalent steel on lattice lines next to the mortar; nodal integration:
+    0.57), below 0.3. At 0.9 Δt_crit it runs the impact (~260 steps: the weight strikes the plate,
+    the beam bends) with the energy balance within the study's 2 % (studies.rc_beam.TOL_ENERGY);
+    at 1.2 Δt_crit it grows exponentially within a few tens of steps (the central-difference
+    amplification of the highest mode above ω Δt = 2: measured 38 steps), so the step that
+    separates the two is the spectrum's, within (0.9, 1.2)."""
+    from studies.rc_beam import TOL_ENERGY, energy_error
+
+    runs, dt_cfl = consistent_a
+    ok, bad = runs[0.9], runs[1.2]
+    dt_crit = ok["dt"] / 0.9
+    assert dt_crit < 0.3 * dt_cfl  # the CFL step of the old default lies above the critical step
+    assert ok["status"] == "ok"
+    assert ok["steps"] >= 0.9 * 1e-4 / ok["dt"]
+    assert np.max(ok["impact_force"]) > 1e4 and -ok["midspan_w"][-1] > 0
+    assert np.max(np.abs(energy_error(ok))) <= TOL_ENERGY
+    assert bad["status"].startswith("unstable")
+    assert bad["dt"] == pytest.approx(1.2 * dt_crit, rel=1e-12)
+
+
+# -- the kernel reduction of 003 §4.2(2) in classic SPH -------------------------------------------
+@pytest.fixture(scope="module")
+def small_block():
+    """A jittered 5³ block (3-D, 10 mm spacing) with random stresses and velocities, its
+    neighbours, and one interior particle p (index 62, the centre) taken as fully released."""
+    from sph.kernels import SUPPORT
+    from sph.neighbours import neighbour_list
+
+    rng = np.random.default_rng(7)
+    dx = 0.01
+    g = np.arange(5) * dx
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    x = np.ascontiguousarray(x + 0.1 * dx * rng.standard_normal(x.shape))
+    n = len(x)
+    h = 1.3 * dx
+    ip, ix = neighbour_list(x, SUPPORT * h)
+    s = rng.standard_normal((n, 3, 3)) * 1e6
+    return dict(x=x, v=rng.standard_normal((n, 3)), m=np.full(n, 2.2),
+                rho=2200.0 * (1 + 0.05 * rng.random(n)), sigma=0.5 * (s + s.transpose(0, 2, 1)),
+                c=np.full(n, 2300.0), h=h, ip=ip, ix=ix, p=62, phi=0.05)
+
+
+def _without(ip, ix, i, p):
+    """The neighbour list with the pair (i, p) removed from row i (CSR)."""
+    row = ix[ip[i]:ip[i + 1]]
+    keep = np.ones(len(ix), bool)
+    keep[ip[i] + np.flatnonzero(row == p)] = False
+    ip2 = ip.copy()
+    ip2[i + 1:] -= 1
+    return ip2, ix[keep]
+
+
+def test_kernel_reduction_scales_the_forces_across_a_released_particle(small_block):
+    """sph.classic.force_pass with the kernel factors kf (φ_min at p, 1 elsewhere) against the
+    unreduced pass: p's acceleration is φ_min times the unreduced one (all its pairs cross it); a
+    neighbour i's is its acceleration without the pair (i, p) (the neighbour list with that pair
+    removed: an independent split of the sum) plus φ_min times that pair's share; a particle with p
+    not among its neighbours is untouched; Σ m a stays zero (the factor is symmetric).
+    Tolerance: round-off of the pair sums."""
+    from sph.classic import force_pass
+
+    b = small_block
+    n, p, phi = len(b["x"]), b["p"], b["phi"]
+    zero, fixed = np.zeros((n, 3)), np.zeros((n, 3), np.uint8)
+    R = np.zeros((n, 3, 3))
+
+    def acc(ip, ix, kf=None):
+        a = np.zeros((n, 3))
+        force_pass(b["x"], b["v"], b["m"], b["rho"], b["sigma"], R, ip, ix, b["h"], b["c"], 1.0,
+                   1.0, 0, 1.0, zero, a, fixed, zero, 0.0, 0.0, False, kf)
+        return a
+
+    kf = np.ones(n)
+    kf[p] = phi
+    full, red = acc(b["ip"], b["ix"]), acc(b["ip"], b["ix"], kf)
+    scale = np.abs(full).max()
+    assert np.allclose(red[p], phi * full[p], rtol=0, atol=1e-12 * scale)
+    nb = [i for i in range(n) if i != p and p in b["ix"][b["ip"][i]:b["ip"][i + 1]]]
+    far = [i for i in range(n) if i != p and i not in nb]
+    assert len(nb) > 20 and far
+    near = sorted(nb, key=lambda i: np.linalg.norm(b["x"][i] - b["x"][p]))[:6]  # at ~Δx
+    for i in near:
+        rest = acc(*_without(b["ip"], b["ix"], i, p))[i]
+        assert np.allclose(red[i], rest + phi * (full[i] - rest), rtol=0, atol=1e-12 * scale)
+        assert np.linalg.norm(full[i] - rest) > 1e-3 * scale  # the pair's share is not small
+    assert np.array_equal(red[far], full[far])
+    assert np.allclose((b["m"][:, None] * red).sum(axis=0), 0.0, atol=1e-12 * scale * b["m"].sum())
+
+
+def test_kernel_reduction_scales_the_velocity_gradient_across_a_released_particle(small_block):
+    """sph.classic.rates_pass, hypoelastic from zero stress over a unit step (σ = λ tr L I + 2μ sym
+    L, linear in L): with the kernel factors, p's stress is φ_min times the unreduced one and a
+    neighbour i's is the stress without the pair (i, p) plus φ_min times that pair's share."""
+    from sph.classic import rates_pass
+
+    b = small_block
+    n, p, phi = len(b["x"]), b["p"], b["phi"]
+    lam, mu = np.full(n, 3e9), np.full(n, 5e9)
+
+    def stress(ip, ix, kf=None):
+        sig = np.zeros((n, 3, 3))
+        rates_pass(b["x"], b["v"], b["m"], b["rho"], b["rho"].copy(), sig,
+                   np.tile(np.eye(3), (n, 1, 1)), ip, ix, b["h"], 1.0, lam, mu, False,
+                   np.zeros((1, 16)), np.zeros(n, np.int64), np.zeros((n, 0)), np.zeros((n, 0)),
+                   0.0, np.zeros(n, np.int64), np.zeros((n, 3, 3)), kf)
+        return sig
+
+    kf = np.ones(n)
+    kf[p] = phi
+    full, red = stress(b["ip"], b["ix"]), stress(b["ip"], b["ix"], kf)
+    scale = np.abs(full).max()
+    assert np.allclose(red[p], phi * full[p], rtol=0, atol=1e-12 * scale)
+    i = int(b["ix"][b["ip"][p]:b["ip"][p + 1]][0])
+    rest = stress(*_without(b["ip"], b["ix"], i, p))[i]
+    assert np.allclose(red[i], rest + phi * (full[i] - rest), rtol=0, atol=1e-12 * scale)
+
+
+def test_kernel_factors_from_the_released_flag():
+    """sph.classic.kernel_factors: φ_min of the particle's mortar where its fully-released flag is
+    set, 1 for partly released mortar and for any other law (the steel's history column 16 is not a
+    flag); and the option needs the hyperelastic stress path."""
+    from sph.classic import Body, kernel_factors
+    from workbench.materials import Material, MaterialTable
+    from workbench.materials.mortar import H_RELEASED
+
+    mortar = Material.mortar(E=11.9e9, nu=0.22, f_t=1.61e6, f_c=16.1e6, eps_release=0.017,
+                             phi_min=0.07)
+    table = MaterialTable((Material.j2_linear(E=2e11, nu=0.3, sigma_y0=4e8, H=2e9), mortar))
+    mat_id = np.array([1, 1, 0, 1])
+    h = np.zeros((4, table.n_history))
+    h[[0, 2], H_RELEASED] = 1.0
+    h[3, H_RELEASED - 1] = 0.9  # damaged, not released
+    assert np.array_equal(kernel_factors(table, mat_id, h, np.empty(4)), [0.07, 1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="^kernel_reduction"):
+        Body(np.zeros((2, 3)), np.ones(2), mortar, 0.01, stress="hypoelastic",
+             kernel_reduction=True)
+
+
+# -- the full beam (symmetry=False) against the quarter model -------------------------------------
+@pytest.mark.parametrize("r", [5, 8])
+def test_full_beam_is_the_quarter_model_mirrored(r):
+    """``symmetry=False`` at 20 and 12.5 mm (12.5 mm: x_e = 420 mm is not a lattice multiple, the
+    lattice must still have a node on x = 0 and y = 0): the full beam's particles are the quarter
+    model's mirrored in x = 0 and y = 0 (as sets of positions, per region), every body's mass is
+    four times the quarter's (the plane particles' half volumes become whole), the weight's is
+    the full 100 kg, and there are no symmetry rollers. Closed forms; tolerance round-off."""
+    q, f = RCBeam(), RCBeam(symmetry=False)
+    pq, pf = discretise(driver.model_at(q, r)[0], r), discretise(driver.model_at(f, r)[0], r)
+    assert not driver.model_at(f, r)[0].constraints
+    assert pq.region_names == pf.region_names
+    key = lambda X: {tuple(np.round(p / pq.dx, 6)) for p in X}
+    for k, name in enumerate(pq.region_names):
+        Xq = pq.X[pq.region == k]
+        mirrored = np.concatenate([Xq * s for s in ((1, 1, 1), (-1, 1, 1), (1, -1, 1), (-1, -1, 1))])
+        assert key(pf.X[pf.region == k]) == key(mirrored), name
+        assert pf.m[pf.region == k].sum() == pytest.approx(4 * pq.m[pq.region == k].sum(), rel=1e-12)
+    assert pf.m[pf.in_regions(["weight"])].sum() == pytest.approx(100.0, rel=1e-12)
+    assert f.copies == 1 and q.copies == 4
+
+
+@pytest.mark.xfail(strict=True, reason="issue 12 gate 4 fails: the contact of sph.contact acts per "
+                   "particle pair, not weighted by volume, so the weight-plate and beam-support "
+                   "pairs on a symmetry plane (half particles) push as hard as whole ones: the "
+                   "quarter model's contact is stiffer (A, 20 mm, nodal csph: peak impact force "
+                   "171 kN against the full beam's 137 kN, mid-span displacement 11 % apart over "
+                   "0.5 ms, 5.6 % over 1 ms; 7.4 % at 12.5 mm)")
+def test_quarter_model_matches_the_full_beam():
+    """Issue 12 gate 4: specimen A at 20 mm, nodal csph, the quarter model's mid-span displacement
+    history against the full beam's over the first 0.5 ms within 1 % of the full beam's largest
+    (the issue's bound)."""
+    w = {}
+    for sym in (True, False):
+        out = driver.solve("csph", RCBeam(symmetry=sym, t_end=5e-4, n_out=50), 5,
+                           integration="nodal")
+        w[sym] = (np.asarray(out["time"]), -np.asarray(out["midspan_w"]))
+    (tq, wq), (tf, wf) = w[True], w[False]
+    assert np.max(np.abs(wq - np.interp(tq, tf, wf))) <= 0.01 * np.max(np.abs(wf))

@@ -134,11 +134,13 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
     """studies.rc_beam.dataset on the two runs: units on every variable, provenance attributes,
     the gates of both runs pass, the crack fractions are fractions."""
     from studies import rc_beam
+    from workbench.materials.mortar import H_DAMAGE
     from workbench.results import write
 
     scene = RCBeam(t_end=2.5e-4, n_out=50)
     outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
-    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=False)
+    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=False,
+                         kr={8: short_b["sph"]})  # the same run stands in for "with" here
     assert all("units" in ds[v].attrs for v in ds.data_vars)
     for k in ("study", "git_revision", "cpu_count", "param_f_t", "angle_bins"):
         assert k in ds.attrs
@@ -150,7 +152,16 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
         assert 0 < w < 0.01
         tot = sum(float(ds[f"cracked_{k}"].sel(solver=m, **sel)) for k in rc_beam.ANGLE_BINS)
         assert 0 <= tot <= 1
+        # the driver's final history: one row per particle, the mortar's damage in it
+        h = short_b[m]["history"]
+        assert h.shape[0] == short_b[m]["n_particles"] and np.max(h[:, H_DAMAGE]) > 0
     assert str(ds.status.sel(solver="csph", specimen="A", resolution=8).values) == "not run"
+    # the kernel-reduction dimension of specimen B (sph): without = the main run, with = kr's
+    kr = ds.kr_max_displacement.sel(resolution=8)
+    assert ds.kr_midspan_displacement.dims == ("kernel_reduction", "resolution", "time")
+    assert float(kr.sel(kernel_reduction=0)) == float(ds.max_displacement.sel(solver="sph", **sel))
+    assert float(kr.sel(kernel_reduction=1)) == float(kr.sel(kernel_reduction=0))
+    assert any("kernel reduction" in n for n in rc_beam.report_notes(ds))
     write(ds, tmp_path / "rc_beam.nc")
 
 
@@ -212,3 +223,45 @@ def test_crack_orientation_of_a_uniform_stretch(direction, expected):
         assert c["cracked"].all() == opened and c["cracked"].any() == opened
         if opened:
             assert c["fraction"][expected] == 1.0
+
+
+def test_crack_classes_from_the_damage_tensor():
+    """studies.rc_beam.crack_orientation with a constructed final history on the undeformed beam
+    (B, 12.5 mm; the strain stand-in sees no crack): half of the mortar particles with Ω = n⊗n
+    along the span x (fully released: flexural), a quarter with Ω = n⊗n at 45° in x-z plus a
+    partial 0.6 along y (shear: the largest eigenvalue's direction decides), an eighth with
+    Ω = 0.999 along z (damaged, not fully released: not cracked), the rest virgin. The fractions
+    are the constructed counts over all mortar particles; the directions the constructed n."""
+    from sph.driver import model_at
+    from sph.particles import discretise
+    from studies.rc_beam import CRACK_DAMAGE, crack_orientation
+    from workbench.materials.mortar import H_OMEGA, N_HISTORY
+
+    s = RCBeam(specimen="B")
+    model, _ = model_at(s, 8)
+    ps = discretise(model, 8)
+    mortar = np.flatnonzero(ps.region == ps.region_names.index("mortar"))
+    n_m = len(mortar)
+    h = np.zeros((ps.n, N_HISTORY))
+
+    def put(rows, Om):  # Voigt order xx, yy, zz, yz, xz, xy
+        h[rows, H_OMEGA:H_OMEGA + 6] = [Om[0, 0], Om[1, 1], Om[2, 2], Om[1, 2], Om[0, 2], Om[0, 1]]
+
+    a, b, c = n_m // 2, n_m // 2 + n_m // 4, n_m // 2 + n_m // 4 + n_m // 8
+    ex, ez, d = np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([1.0, 0, 1.0]) / np.sqrt(2)
+    put(mortar[:a], np.outer(ex, ex))
+    put(mortar[a:b], np.outer(d, d) + 0.6 * np.diag([0, 1.0, 0]))
+    put(mortar[b:c], 0.999 * np.outer(ez, ez))
+    out = crack_orientation(s, 8, ps.X.copy(), h)
+    assert out["measure"] == "damage"
+    assert not out["strain_fraction"]["flexural"] and not any(out["strain_fraction"].values())
+    assert out["fraction"]["flexural"] == a / n_m
+    assert out["fraction"]["shear"] == (b - a) / n_m
+    assert out["fraction"]["longitudinal"] == 0.0
+    assert np.count_nonzero(out["cracked"]) == b
+    assert np.allclose(np.abs(out["direction"][:a] @ ex), 1.0, atol=1e-12)
+    assert np.allclose(np.abs(out["direction"][a:b] @ d), 1.0, atol=1e-12)
+    assert np.allclose(out["angle"][a:b], 45.0, atol=1e-9)
+    assert np.allclose(out["damage"][b:c], 0.999) and (out["damage"][b:c] < CRACK_DAMAGE).all()
+    # without a history: the strain stand-in
+    assert crack_orientation(s, 8, ps.X.copy())["measure"] == "strain"

@@ -42,8 +42,14 @@ Our choices (all parameters below; ``workbench list`` shows them):
   (``contact_stiffness`` × the steel's E);
 * the release strain is tied to the spacing by eq. 5 (G_F fixed): ε_r(Δx) = ε_r · 5 mm / Δx
   (``scale_release``), so the energy released per crack area does not depend on the spacing;
-* no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) is not
-  part of this scene yet;
+* no gravity (the weight's speed is the impact speed); the kernel reduction of §4.2(2) belongs to
+  the particle method: classic SPH's ``kernel_reduction`` option (:func:`sph.classic.kernel_factors`);
+* ``symmetry=False``: the full beam (each box of the quarter model mirrored in x = 0 and y = 0, the
+  lattice anchored so that it is the quarter model's mirrored: :meth:`RCBeam.mortar_shape`), no
+  rollers, forces not scaled (:attr:`RCBeam.copies`) — for issue 12's symmetry gate. The gate
+  fails (tests/test_rc_beam.py, strict xfail): the particle contact is per pair, so pairs on a
+  symmetry plane (half particles) push as hard as whole ones and the quarter model's contact is
+  stiffer (A, 20 mm: peak impact force 171 kN against 137 kN);
 * ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
 * ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
   contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic
@@ -53,9 +59,12 @@ Our choices (all parameters below; ``workbench list`` shows them):
 
 Running: ``driver.solve("sph", RCBeam(), 20, stress="hyperelastic")`` (the mortar and the J2 steel
 need classic SPH's hyperelastic stress) and ``driver.solve("csph", RCBeam(), 20,
-integration="nodal")``: the integration-consistent CSPH (the default) fails a material point within
-a few steps on this scene at 5 mm even at ``dt_factor`` 0.03 (at 12.5–20 mm it runs at 0.1;
-tests/test_rc_beam.py holds it as a strict xfail).
+integration="nodal")``. The integration-consistent CSPH (the default) fails at the CFL step
+(``dt_factor`` 0.3): its critical step 2/ω_max (:mod:`sph.spectrum`) is only 0.20 Δx/c_p on
+specimen A at 12.5 mm (0.40 on B; 0.94 at 20 mm; nodal integration 0.57 at 12.5 mm) — the stiff
+equivalent steel of the bars on lattice lines next to the mortar. With ``dt_reference='spectrum'``
+and ``dt_factor`` 0.9 it runs (stable at 0.9 Δt_crit, exponential growth at 1.2 Δt_crit:
+tests/test_rc_beam.py).
 
 Observed (quarter model; :meth:`RCBeam.summarise` gives the full beam's): the mid-span bottom
 displacement (probe at x = y = z = 0), the weight's mean displacement, the contact force on the
@@ -71,7 +80,7 @@ import workbench.scenes.model as m
 
 from ..materials import Material, linear_hardening_modulus
 from .params import ParameterError, Scene, SceneError, param
-from .shapes import Box, Plane, Point
+from .shapes import Box, Difference, Plane, Point, Union
 
 D10_AREA = 71.33e-6
 """JIS G 3112 nominal section of a D10 deformed bar, m²."""
@@ -157,7 +166,13 @@ class RCBeam(Scene):
     t_end: float = param(0.01, "s", "simulated time", lo=0, lo_open=True)
     dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10,
                              lo_open=True)
+    dt_reference: str = param("cfl", "-", "what dt_factor multiplies: cfl (the CFL estimate "
+                              "dx/c_p) or spectrum (the method's critical step 2/omega_max at the "
+                              "initial state, sph.spectrum)", choices=("cfl", "spectrum"))
     n_out: int = param(200, "-", "records over the run", lo=1)
+    symmetry: bool = param(True, "-", "quarter model by the symmetry planes x = 0 and y = 0 "
+                           "(rollers); false: the full beam (every box mirrored, no rollers; "
+                           "forces not scaled), for the symmetry check")
     structure: str = param("impact", "-", "impact: the weight strikes the plate, supports by "
                            "contact; beam: the beam with its rebar alone on hinges (a line "
                            "x = span/2, z = 0 held along z), no plate, weight or contact, lowest "
@@ -236,6 +251,44 @@ class RCBeam(Scene):
         return 0.25 * self.mass / V
 
     # -- the model ----------------------------------------------------------------------------
+    @property
+    def copies(self) -> int:
+        """How many copies of the model make the full beam: 4 (quarter model) or 1."""
+        return 4 if self.symmetry else 1
+
+    def whole(self, box: Box):
+        """A box of the quarter model (x ≥ 0, y ≥ 0) as the model's shape: itself with
+        ``symmetry``, else the full beam's: the box and its mirror images in x = 0 and y = 0, as
+        one box across a plane the box starts on, two apart otherwise (no overlap: the
+        discretisation's volumes would count an overlap twice)."""
+        if self.symmetry:
+            return box
+        (x0, y0, z0), (x1, y1, z1) = box.lo, box.hi
+
+        def spans(a0, a1):
+            return ((-a1, a1),) if abs(a0) < TOL else ((a0, a1), (-a1, -a0))
+
+        parts = tuple(Box((a0, b0, z0), (a1, b1, z1))
+                      for a0, a1 in spans(x0, x1) for b0, b1 in spans(y0, y1))
+        return parts[0] if len(parts) == 1 else Union(parts)
+
+    def mortar_shape(self, dx: float):
+        """The mortar's box, x ∈ [0, x_e], y ∈ [0, B/2], z ∈ [0, H] (quarter model) or the full
+        beam's, x ∈ [−x_e, x_e], y ∈ [−B/2, B/2]. The particle lattice is anchored at the lowest
+        corner of the regions' bounds, so in the full beam the mortar's bounds reach down to the
+        lattice nodes −⌈x_e/Δx⌉Δx, −⌈B/(2Δx)⌉Δx (a box minus the slabs beyond −x_e and −B/2):
+        the full beam's lattice is then the quarter model's, mirrored (a node on x = 0, y = 0)."""
+        xe, B2, H = self.span / 2 + self.overhang, self.B / 2, self.H
+        box = Box((0.0, 0.0, 0.0), (xe, B2, H))
+        if self.symmetry:
+            return box
+        ax = -math.ceil(xe / dx - TOL) * dx
+        ay = -math.ceil(B2 / dx - TOL) * dx
+        big = (xe + dx, B2 + dx, H + dx)
+        beyond = Union((Box((ax - dx, ay - dx, -dx), (-xe, big[1], big[2])),
+                        Box((ax - dx, ay - dx, -dx), (big[0], -B2, big[2]))))
+        return Difference(Box((ax, ay, 0.0), (xe, B2, H)), beyond)
+
     def bars(self, dx: float) -> list:
         """The steel on lattice lines at spacing dx: a list of (name, Box, scale, priority) — the
         main bar (quarter model: one), and three legs per stirrup (vertical at the bar's y, bottom
@@ -278,32 +331,36 @@ class RCBeam(Scene):
             return self._beam_model(dx)
         steel = self.steel()
         weight = Material.svk(E=self.E_s, nu=self.nu_s, rho=self.weight_density(dx))
-        regions = [m.Region("mortar", Box((0.0, 0.0, 0.0), (xe, B2, H)), self.mortar(dx), body="beam"),
-                   m.Region("plate", Box((0.0, 0.0, H), (xp, B2, top)), steel, priority=1, body="beam")]
+        W = self.whole
+        regions = [m.Region("mortar", self.mortar_shape(dx), self.mortar(dx), body="beam"),
+                   m.Region("plate", W(Box((0.0, 0.0, H), (xp, B2, top))), steel, priority=1, body="beam")]
         for name, box, scale, pri in self.bars(dx):
-            regions.append(m.Region(name, box, self.steel(scale), priority=pri, body="beam"))
-        regions.append(m.Region("weight", Box((0.0, 0.0, zw), (xp, B2, zw + self.weight_height)),
+            regions.append(m.Region(name, W(box), self.steel(scale), priority=pri, body="beam"))
+        regions.append(m.Region("weight", W(Box((0.0, 0.0, zw), (xp, B2, zw + self.weight_height))),
                                 weight, body="weight"))
-        support = Box((L2 - dx, 0.0, -3 * dx), (L2 + dx, B2, -dx))
+        support = W(Box((L2 - dx, 0.0, -3 * dx), (L2 + dx, B2, -dx)))
         regions.append(m.Region("support", support, steel, held=True, body="support"))
         k = self.contact_stiffness * self.E_s
+        sym = ((m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0))) if self.symmetry
+               else ())
         return m.Model(
             dim=3, plane=None, length=H, name=self.name, regions=tuple(regions),
-            sets=(m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0)),
-                  m.Set("midspan_bottom", Point((0.0, 0.0, 0.0))),
-                  m.Set("weight_all", regions[-2].shape, region="weight"),
-                  m.Set("support_all", support, region="support")),
-            constraints=(m.Roller("sym_x", 0), m.Roller("sym_y", 1)),
+            sets=sym + (m.Set("midspan_bottom", Point((0.0, 0.0, 0.0))),
+                        m.Set("weight_all", regions[-2].shape, region="weight"),
+                        m.Set("support_all", support, region="support")),
+            constraints=((m.Roller("sym_x", 0), m.Roller("sym_y", 1)) if self.symmetry else ()),
             loads=(m.InitialVelocity((0.0, 0.0, -self.impact_velocity), regions=("weight",)),),
             contact=(m.Contact(("weight", "beam"), k, dx), m.Contact(("beam", "support"), k, dx)),
-            drive=m.Explicit(self.t_end, self.dt_factor, n_out=self.n_out),
+            drive=m.Explicit(self.t_end, self.dt_factor, n_out=self.n_out,
+                             dt_reference=self.dt_reference),
             observables=(m.Displacement("midspan_w", "midspan_bottom", 2),
                          m.Displacement("weight_w", "weight_all", 2),
                          m.ContactForce("weight_force", "weight", 2),
                          m.ContactForce("support_force", "support", 2),
                          m.Reaction("support_hold", "support_all", 2)),
-            notes=(f"003 specimen {self.specimen}: quarter model (symmetry rollers on x = 0 and "
-                   "y = 0); bars on lattice lines with an equivalent steel (E, sigma_y, H, rho x "
+            notes=(f"003 specimen {self.specimen}: "
+                   + ("quarter model (symmetry rollers on x = 0 and y = 0)" if self.symmetry
+                      else "the full beam (no symmetry planes)") + "; bars on lattice lines with an equivalent steel (E, sigma_y, H, rho x "
                    "A_bar/A_particles); one-sided supports by contact with held blocks; weight a "
                    "separate body of density mass/(4 V_discretised).",))
 
@@ -313,23 +370,26 @@ class RCBeam(Scene):
         contact of a hinge support), symmetry rollers on x = 0 and y = 0; its lowest modes."""
         L2, B2, H = self.span / 2, self.B / 2, self.H
         xe = L2 + self.overhang
-        regions = [m.Region("mortar", Box((0.0, 0.0, 0.0), (xe, B2, H)), self.mortar(dx), body="beam")]
+        W = self.whole
+        regions = [m.Region("mortar", self.mortar_shape(dx), self.mortar(dx), body="beam")]
         for name, box, scale, pri in self.bars(dx):
-            regions.append(m.Region(name, box, self.steel(scale), priority=pri, body="beam"))
+            regions.append(m.Region(name, W(box), self.steel(scale), priority=pri, body="beam"))
         q = 0.25 * dx
-        hinge = Box((L2 - q, 0.0, -q), (L2 + q, B2, q))
+        hinge = W(Box((L2 - q, 0.0, -q), (L2 + q, B2, q)))
+        sym = ((m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0))) if self.symmetry
+               else ())
+        rollers = (m.Roller("sym_x", 0), m.Roller("sym_y", 1)) if self.symmetry else ()
         return m.Model(
             dim=3, plane=None, length=H, name=self.name, regions=tuple(regions),
-            sets=(m.Set("sym_x", Plane(0, 0.0)), m.Set("sym_y", Plane(1, 0.0)),
-                  m.Set("hinge", hinge), m.Set("midspan_bottom", Point((0.0, 0.0, 0.0)))),
-            constraints=(m.Roller("sym_x", 0), m.Roller("sym_y", 1), m.Roller("hinge", 2)),
+            sets=sym + (m.Set("hinge", hinge), m.Set("midspan_bottom", Point((0.0, 0.0, 0.0)))),
+            constraints=rollers + (m.Roller("hinge", 2),),
             drive=m.Modal(3),
             observables=(m.Displacement("midspan_w", "midspan_bottom", 2),),
             notes=(f"003 specimen {self.specimen}, the beam with its rebar alone on hinges: quarter "
                    "model, lowest modes about the reference state.",))
 
     def summarise(self, out: dict) -> dict:
-        """The full beam's histories (the quarter model's forces × 4): ``midspan_displacement``
+        """The full beam's histories (the quarter model's forces × 4, :attr:`copies`): ``midspan_displacement``
         (m, positive downward), ``impact_force`` (N, the plate's push on the weight, at the
         record), ``support_reaction`` (N, both supports together, at the record),
         ``support_reaction_mean`` (N, the force holding the support blocks, its time mean over the
@@ -339,12 +399,13 @@ class RCBeam(Scene):
 
         if "time" not in out or "midspan_w" not in out:
             return {}  # the modal check: periods only
+        c = float(self.copies)
         w = -np.asarray(out["midspan_w"], float)
-        F = 4.0 * np.asarray(out["weight_force"], float)
-        R = -4.0 * np.asarray(out["support_force"], float)
+        F = c * np.asarray(out["weight_force"], float)
+        R = -c * np.asarray(out["support_force"], float)
         extra = {}
         if "support_hold" in out:
-            extra["support_reaction_mean"] = 4.0 * np.asarray(out["support_hold"], float)
+            extra["support_reaction_mean"] = c * np.asarray(out["support_hold"], float)
         return dict(midspan_displacement=w, impact_force=F, support_reaction=R, **extra,
                     max_displacement=float(np.nanmax(w)) if w.size else math.nan,
                     max_impact_force=float(np.nanmax(F)) if F.size else math.nan,
