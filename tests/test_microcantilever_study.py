@@ -139,3 +139,24 @@ def test_csph_elastic_slope_against_the_fem(fem_quick):
     S = csph_slope(out["deflection_down"], out["load"], out["time"], np.inf, fem_quick["window"])
     err = abs(S / fem_quick["slope_limit"] - 1)
     assert err <= slope_tolerance(fem_quick, 5), (S, fem_quick["slope_limit"], err)
+
+
+def test_energy_balance_and_quasi_static_measures():
+    """Gates 2 and 4 read run_summary: on made-up histories with a known imbalance and a known
+    kinetic/elastic ratio (closed forms), the balance error is the largest |W − ΣE|/W over the
+    records (from the first with W > 0) and the ratio the largest K/E over the second half of
+    the time to the first failure."""
+    from studies.microcantilever import run_summary
+
+    t = np.linspace(0.0, 5e-6, 401)
+    W = 1e-9 * (t / t[-1]) ** 2
+    K = np.where(t < 2e-6, 0.004, 0.0) * W  # K/E = 0.004/0.996 up to the failure at 2 µs ...
+    K[(t > 1.5e-6) & (t < 1.6e-6)] *= 2  # ... and twice that over 1.5–1.6 µs
+    E, Wp, R = W - K, 0 * t, 0 * t
+    E[300] *= 1.0 - 0.007 / (1 - 0.004 * (t[300] < 2e-6))  # 0.7 % of W missing at one record
+    out = dict(time=t, load=1e3 * t, deflection_down=0.2 * t, failed=(t >= 2e-6).astype(float),
+               external_work=W, kinetic_energy=K, strain_energy=E, plastic_work=Wp,
+               released_energy=R, status="ok")
+    s = run_summary(out, MicroCantilever(dim=2))
+    assert s["energy_balance_error"] == pytest.approx(0.007, rel=1e-9)
+    assert s["kinetic_ratio"] == pytest.approx(0.008 / 0.992, rel=1e-9)
