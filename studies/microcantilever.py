@@ -58,16 +58,21 @@ GATED_RULES = ("compression", "literal")
 OPTIONS_3D = {"integration": "nodal"}
 """csph options of 3-D runs. The integration-consistent correction (the default) gives this
 scene's 3-D body (the beam on a deeper, wider block) gradients about five times those of nodal
-integration (median |G| Δx 7.4 against 1.4 at H/Δx = 5) and a highest frequency 40 times higher
-(7.6e11 against 1.8e10 rad/s), so that the explicit step at 0.3 of the CFL estimate is unstable in
-the first steps at any practical factor; nodal integration with the quadratic correction
-(``csph_quad``'s discretisation) runs. Reported as an open problem of the consistent correction
-in 3-D."""
+integration (median |G| Δx 7.4 against 1.4 at H/Δx = 5) and a highest frequency 40 times higher:
+its critical step 2/ω_max (:mod:`sph.spectrum`) is 0.016 of the CFL estimate Δx/c_p at H/Δx = 5
+(ω_max = 7.6e11 rad/s), against 0.66 with nodal integration (1.8e10 rad/s) — 1.02 and 0.80 in 2-D.
+At dt_reference='spectrum', dt_factor = 0.9 the consistent run is stable before the first
+failure, but it takes 0.9·0.016/0.3 = 1/21 of the nodal run's step (about 2.1 million steps for
+the 5 µs of a run, an hour on one core against three minutes), and a step from the initial
+spectrum does not bound the cracked body's: in 2-D at 0.9 of Δt_crit the energy balance blows up
+after the first failures. Nodal integration with the quadratic correction (``csph_quad``'s
+discretisation) at 0.3 of the CFL estimate stays the 3-D option; the consistent correction in 3-D
+remains an open problem."""
 FEM_RESOLUTIONS = (5, 10, 20)
 """Elements (9-node quadrilaterals, plane strain) across H of the FEM reference of a 2-D run; the
 smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5)."""
 QUICK_FEM_RESOLUTIONS = (5, 10)
-"""``--quick``: the two cheapest meshes (about 4 and 10 s)."""
+"""``--quick``: the two cheapest meshes (about 2 and 4 s)."""
 FEM_STEP = 1e-3
 FEM_MAX = 0.02
 """The FEM's static path: the patch pushed down in steps of FEM_STEP·H to FEM_MAX·H (5 nm to
@@ -77,7 +82,7 @@ SINGULAR_ORDER = 2 * 0.5445
 corner (the root of the beam on its block, and the edge of the rigidly moved patch): the stress
 there goes as r^(λ-1), λ = 0.5445 (Williams 1952, plane elasticity, 270° corner), and the energy
 error as h^(2λ) (Strang & Fix §8.2) — for the FEM and for any consistent particle method alike.
-The FEM ladder of this scene observes 1.15 (H/h = 5, 10, 20)."""
+The FEM ladder of this scene observes 1.15 (H/h = 5, 10, 20), csph's 1.03 (H/Δx = 5, 10, 20)."""
 N_TIME = 301
 ERROR_LABEL = "energy balance error |W_ext - (K + E + W_p + W_rel)| / W_ext, max over time [-]"
 
