@@ -690,6 +690,14 @@ def plot(ds: xr.Dataset, outdir) -> list:
                 sel = dict(solver="csph", case=case, rule=rule, resolution=r)
                 ax.plot(ds.deflection.sel(**sel) * 1e6, ds["load"].sel(**sel), ls=styles.get(str(rule), "-"),
                         lw=1, label=f"{rule}, H/dx = {int(r)}")
+        if "fem_load" in ds:  # the static FEM (no damage) to the first failure of this case
+            for r in ds.fem_resolution.values:
+                u = float(ds.fem_first_failure_deflection.sel(case=case, fem_resolution=r))
+                keep = ds.fem_deflection.values <= (u if np.isfinite(u) else np.inf)
+                ax.plot(ds.fem_deflection.values[keep] * 1e6,
+                        ds.fem_load.sel(fem_resolution=r).values[keep], "k", lw=0.8,
+                        alpha=0.4 + 0.6 * float(r) / float(ds.fem_resolution.values[-1]),
+                        label=f"FEM, H/h = {int(r)}, to its first failure")
         ax.set_xlabel("deflection of the loading patch [um]")
         ax.set_ylabel("load [N/m]" if ds.attrs.get("plane") == "strain" else "load [N]")
         ax.set_title(f"{case}-granular")
