@@ -107,7 +107,11 @@ class MicroCantilever(Scene):
     velocity: float = param(0.2, "m/s", "downward velocity of the loading patch", lo=0, lo_open=True)
     t_ramp: float = param(5e-7, "s", "time over which the velocity is ramped up", lo=0, lo_open=True)
     t_end: float = param(5e-6, "s", "simulated time", lo=0, lo_open=True)
-    dt_factor: float = param(0.3, "-", "time step over the CFL estimate", lo=0, hi=10, lo_open=True)
+    dt_factor: float = param(0.3, "-", "time step over its reference (dt_reference)", lo=0, hi=10,
+                             lo_open=True)
+    dt_reference: str = param("cfl", "-", "what dt_factor multiplies: the CFL estimate or the "
+                              "method's critical step 2/omega_max (sph.spectrum)",
+                              choices=("cfl", "spectrum"))
 
     def check(self):
         for name in ("n_grains", "seed"):
@@ -192,7 +196,8 @@ class MicroCantilever(Scene):
                   m.Set("patch", patch)),
             constraints=(m.Clamp("back"), m.Clamp("bottom"),
                          m.Prescribed("patch", up, velocity=v)),
-            drive=m.Explicit(self.t_end, self.dt_factor, n_out=400, energy_growth=None),
+            drive=m.Explicit(self.t_end, self.dt_factor, n_out=400, energy_growth=None,
+                             dt_reference=self.dt_reference),
             observables=(m.Reaction("force", "patch", up), m.Reaction("support", "held", up),
                          m.Displacement("deflection", "patch", up),
                          m.FailedFraction("failed", None),
