@@ -149,21 +149,3 @@ def critical_time_step(body, fixed=None, tol: float = 1e-6) -> float:
     :func:`max_frequency`)."""
     w = max_frequency(body, fixed, tol)
     return 2.0 / w if w > 0 else math.inf
-
-
-def scene_time_steps(method: str, scene, resolution: int, lattice: str | None = None,
-                     **options) -> dict:
-    """The time steps of ``method`` on ``scene`` at ``resolution`` (the body and constraints that
-    :func:`sph.driver.solve` builds): ``dt_cfl`` (Δx/c_p, the CFL estimate at factor 1),
-    ``dt_crit`` (eq. 1), ``omega_max`` (rad/s) and ``n_free`` (free DOFs), s."""
-    from .driver import Run, method_entry, model_at
-    from .particles import discretise
-
-    mod, defaults = method_entry(method)
-    model, _ = model_at(scene, resolution)
-    ps = discretise(model, int(resolution), lattice)
-    body = mod.build(ps, **{**defaults, **options})
-    fixed = Run(model, ps, body).fixed
-    w = max_frequency(body, fixed)
-    return dict(dt_cfl=body.time_step(1.0), dt_crit=2.0 / w if w > 0 else math.inf, omega_max=w,
-                n_free=int(np.count_nonzero(~np.asarray(fixed, bool))))

@@ -93,8 +93,8 @@ def _setup(solver, name, quick):
 
 def time_steps(solver, name, quick) -> dict:
     """``dt_cfl`` and ``dt_crit`` (s) of ``solver`` on the scene ``name`` of the study
-    (:func:`sph.spectrum.scene_time_steps` on the study's body and constraints)."""
-    from sph.spectrum import scene_time_steps
+    (:func:`sph.driver.scene_time_steps` on the study's body and constraints)."""
+    from sph.driver import scene_time_steps
 
     sc, r, opts = _setup(solver, name, quick)
     return scene_time_steps(solver, sc, r, **opts)

@@ -11,7 +11,8 @@ import scipy.linalg
 from sph import driver
 from sph.driver import Run, method_entry, model_at
 from sph.particles import discretise
-from sph.spectrum import critical_time_step, max_frequency, scene_time_steps
+from sph.driver import scene_time_steps
+from sph.spectrum import critical_time_step, max_frequency
 from workbench.scenes import Plate
 from workbench.scenes.params import SceneError
 
