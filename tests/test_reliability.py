@@ -41,7 +41,9 @@ def _refused(argv, capsys, monkeypatch, needle):
     (["run", "ss_curve", "--scheduler", "nonsense"], "--scheduler: 'nonsense' is not allowed"),
 ])
 def test_bad_values_are_refused_before_work(argv, needle, capsys, monkeypatch):
-    _refused(argv, capsys, monkeypatch, needle)
+    err = _refused(argv, capsys, monkeypatch, needle)
+    name = needle.split(":")[0]
+    assert err.removeprefix("workbench: error: ").startswith(name), err  # names the parameter first
 
 
 def test_unreachable_scheduler_is_one_line(capsys, monkeypatch):
@@ -61,8 +63,9 @@ def test_unwritable_output_folder_is_refused_before_work(where, tmp_path, capsys
     if where == "a_file":
         where = tmp_path / "a_file"
         where.write_text("not a folder")
-    _refused(["run", "ss_curve", "--out", str(where)], capsys, monkeypatch, "--out: ")
-    _refused(["verify", "--out", str(where)], capsys, monkeypatch, "cannot be written")
+    for argv in (["run", "ss_curve", "--out", str(where)], ["verify", "--out", str(where)]):
+        err = _refused(argv, capsys, monkeypatch, "cannot be written")
+        assert err.removeprefix("workbench: error: ").startswith("--out: ") and str(where) in err, err
 
 
 def test_resolution_beyond_the_machine_memory_is_refused(capsys, monkeypatch):
