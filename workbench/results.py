@@ -183,13 +183,17 @@ def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Pat
                           f"{err.strerror or err}), nor in {' or '.join(tried)}") from None
 
 
-def _write_atomic(ds: xr.Dataset, path: Path) -> Path:
+def _replace_atomically(path: Path, fill) -> Path:
+    """The one atomic write: ``fill(tmp)`` writes a temporary file beside ``path``, which is
+    fsync'ed (on disk before the rename makes it the file), made world-readable and renamed over
+    ``path``; the folder is fsync'ed after. On any failure the temporary file is removed."""
+    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        ds.to_netcdf(tmp, engine=ENGINE)
-        with open(tmp, "rb+") as fh:  # on disk before the rename makes it the file
+        fill(tmp)
+        with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
@@ -199,6 +203,10 @@ def _write_atomic(ds: xr.Dataset, path: Path) -> Path:
         raise
     _fsync_dir(path.parent)
     return path
+
+
+def _write_atomic(ds: xr.Dataset, path: Path) -> Path:
+    return _replace_atomically(path, lambda tmp: ds.to_netcdf(tmp, engine=ENGINE))
 
 
 def read(path: str | os.PathLike) -> xr.Dataset:
@@ -209,19 +217,9 @@ def read(path: str | os.PathLike) -> xr.Dataset:
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
     """Write a text file (report, JSON cache entry) atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
+
+    def fill(tmp):
+        with open(tmp, "w") as fh:
             fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    _fsync_dir(path.parent)
-    return path
+
+    return _replace_atomically(Path(path), fill)
