@@ -122,13 +122,14 @@ def model_at(scene, resolution: int):
 
 def solve(method: str, scene, resolution: int, lattice: str | None = None, fields=None,
           field_frames: int = DEFAULT_FRAMES, drive=None, static: str = "newton",
-          **options) -> dict:
+          on_record=None, **options) -> dict:
     """Run the particle method ``method`` on ``scene`` at ``resolution`` (module docstring).
     ``lattice`` overrides the model's ('node' or 'cell'); ``drive`` replaces the model's (e.g.
     ``Modal()`` for the linearised periods of a dynamic scene); ``static``: 'newton' (default) or
     'dr' (dynamic relaxation, for the cost comparison); ``fields`` (a folder, or None) writes the
-    ParaView series ``<scene>_<method>_H<resolution>.pvd``; the other ``options`` go to the
-    method's ``build``."""
+    ParaView series ``<scene>_<method>_H<resolution>.pvd``; ``on_record(body, run, t)`` (explicit
+    drives) is called at every record, t = 0 included, to look at the state in between (e.g.
+    :mod:`studies.stability_theory`); the other ``options`` go to the method's ``build``."""
     import dataclasses
 
     t0 = time.perf_counter()
@@ -147,7 +148,7 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
         elif isinstance(model.drive, M.Modal):
             out = run.modal()
         else:
-            out = run.explicit(fields, snap_name, field_frames, t0)
+            out = run.explicit(fields, snap_name, field_frames, t0, on_record)
     out["total_time"] = time.perf_counter() - t0
     out.setdefault("n_particles", int(ps.n))
     out["n_free"] = int(np.count_nonzero(~run.fixed.all(axis=1)))
@@ -372,7 +373,7 @@ class Run:
                     wall_time=time.perf_counter() - t0)
 
     # -- explicit ------------------------------------------------------------------------------
-    def explicit(self, fields, snap_name, field_frames, t0) -> dict:
+    def explicit(self, fields, snap_name, field_frames, t0, on_record=None) -> dict:
         drive = self.model.drive
         body, ps = self.body, self.ps
         dt = body.time_step(drive.dt_factor)
@@ -449,6 +450,8 @@ class Run:
             wes.append(w_ext)
             bal.append(ke + se + sum(lost.values()) - w_ext)
             mom.append(linear_momentum(body.m, body.v))
+            if on_record is not None:
+                on_record(body, self, body.t)
 
         every_diag = max(1, drive.n_out // 50)
         record()

@@ -67,58 +67,16 @@ DRIFT_METHODS = ("hpm", "csph")
 # ------------------------------------------------------------------------------------------------
 
 def run_with_records(method: str, scene, resolution: int, on_record, **options) -> dict:
-    """Run ``method`` on ``scene`` (an explicit drive) the way :func:`sph.driver.solve` does —
-    the method's own time loop in chunks, loads and prescribed motion updated at chunk
-    midpoints, contact through the method's generic loop — calling ``on_record(body, run, t)``
-    at t = 0 and about ``n_out`` times. Returns dict(status, dt, steps, particles, model).
-    (The driver returns only the final state; the theory needs the states in between.)"""
+    """Run ``method`` on ``scene`` (an explicit drive) by :func:`sph.driver.solve`, calling
+    ``on_record(body, run, t)`` at t = 0 and at every record (about ``n_out`` times) until the
+    run ends or the driver's criterion stops it. Returns the driver's output."""
     from sph import driver
-    from sph.particles import discretise
     from workbench.scenes import model as M
 
-    mod, defaults = driver.method_entry(method)
     model, _ = driver.model_at(scene, resolution)
     if not isinstance(model.drive, M.Explicit):
         raise ValueError(f"scene: {scene.name!r} has no explicit drive; allowed: explicit scenes")
-    ps = discretise(model, int(resolution), None)
-    body = mod.build(ps, **{**defaults, **options})
-    run = driver.Run(model, ps, body)
-    drive = model.drive
-    dt = body.time_step(drive.dt_factor)
-    n_steps = int(math.ceil(drive.t_end / dt))
-    every = max(1, n_steps // drive.n_out)
-    chunk = min(every, driver.MAX_CHUNK_VARYING) if run.varying else every
-    fixed = np.ascontiguousarray(run.fixed, dtype=np.uint8)
-    f_ext = run.dead_forces(0.0)
-    v_fix = run.prescribed_velocity(0.0, dt) if run.prescribed else np.zeros_like(ps.X)
-    contact = run._contact_setup()
-    extra = None
-    if contact is not None:
-        from sph.contact import contact_forces
-
-        def extra(x):
-            return contact_forces(x, ps.body, *contact)[0]
-    status = "ok"
-    with driver.threads_for(ps.n):
-        body.start(run.initial_velocity(), f_ext, extra)
-        on_record(body, run, 0.0)
-        next_record = every
-        while body.steps < n_steps:
-            k = min(chunk, n_steps - body.steps)
-            if run.varying:
-                tm = body.t + 0.5 * k * dt
-                f_ext = run.dead_forces(tm)
-                if run.prescribed:
-                    v_fix = run.prescribed_velocity(tm, dt)
-            done = body.advance(k, dt, f_ext, fixed, v_fix, drive.damping, extra)
-            if done < k or not np.isfinite(body.x).all():
-                status = f"unstable: non-finite state or failed material point at t={body.t:.6g} s"
-                break
-            if body.steps < min(next_record, n_steps):
-                continue
-            next_record = (body.steps // every + 1) * every
-            on_record(body, run, body.t)
-    return dict(status=status, dt=dt, steps=int(body.steps), particles=ps, model=model)
+    return driver.solve(method, scene, resolution, on_record=on_record, **options)
 
 
 # ------------------------------------------------------------------------------------------------
