@@ -169,20 +169,12 @@ class NonAffineEnergy:
     and masses m (N,), kg: returns (K_hg, K_loc), J (J/m in 2-D)."""
 
     def __init__(self, X, dx: float, re_ratio: float = 2.1, body=None):
-        from .neighbours import drop_cross_body, neighbour_list
+        from .neighbours import weighted_neighbourhood
 
         if not (dx > 0 and 1.0 < re_ratio <= 6.0):
             raise ValueError(f"re_ratio: {re_ratio!r} is not allowed; r_e/Δx must lie in (1, 6] "
                              "(and dx > 0)")
-        X = np.ascontiguousarray(X, dtype=np.float64)
-        re = re_ratio * dx
-        indptr, indices = neighbour_list(X, re)
-        if body is not None:
-            indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
-        rows = np.repeat(np.arange(len(X)), np.diff(indptr))
-        r2 = np.sum((X[indices] - X[rows]) ** 2, axis=1)
-        self.indptr, self.indices = indptr, indices
-        self.w = np.ascontiguousarray(np.maximum(1.0 - r2 / (re * re), 0.0))
+        self.indptr, self.indices, _, self.w = weighted_neighbourhood(X, re_ratio * dx, body)
 
     def per_particle(self, x, v, m) -> tuple[np.ndarray, np.ndarray]:
         """(hg, loc), each (N,), J: the particles' shares of K_hg and K_loc."""

@@ -144,20 +144,14 @@ class Disorder:
     ``body`` (N,) labels (no weights across bodies), ``mask`` the monitored particles."""
 
     def __init__(self, X, dx, body=None, mask=None):
-        from .neighbours import drop_cross_body
+        from .neighbours import weighted_neighbourhood
 
         X = np.ascontiguousarray(X, dtype=np.float64)
-        re = DISORDER_RE * dx
-        indptr, indices = neighbour_list(X, re)
-        if body is not None:
-            indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+        indptr, indices, X_ij, w = weighted_neighbourhood(X, DISORDER_RE * dx, body)
         rows = np.repeat(np.arange(len(X)), np.diff(indptr))
-        X_ij = X[indices] - X[rows]
-        r2 = np.einsum("pk,pk->p", X_ij, X_ij)
-        w = np.where(r2 < re * re, 1.0 - r2 / (re * re), 0.0)
         A = np.zeros((len(X), X.shape[1], X.shape[1]))
         np.add.at(A, rows, w[:, None, None] * X_ij[:, :, None] * X_ij[:, None, :])
-        self.geo = (indptr, indices, np.ascontiguousarray(X_ij), w, np.linalg.pinv(A))
+        self.geo = (indptr, indices, X_ij, w, np.linalg.pinv(A))
         self.dx = dx
         self.mask = np.ones(len(X), bool) if mask is None else mask
 

@@ -182,3 +182,18 @@ def reverse_pairs(indptr, indices):
             b = indices[p]
             rev[p] = sorted_position(indices, indptr[b], indptr[b + 1], a)
     return rev
+
+
+def weighted_neighbourhood(X: np.ndarray, re: float, body=None):
+    """The reference neighbourhood of the weighted-least-squares fits (004 eq. 4–6): pairs within
+    ``re`` (m) of X (N, d), none across the ``body`` (N,) labels, with X_ij = X_j − X_i (P, d) and
+    the weight w = 1 − r²/r_e² (P,). Returns (indptr, indices, X_ij, w)."""
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    indptr, indices = neighbour_list(X, re)
+    if body is not None:
+        indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+    rows = np.repeat(np.arange(len(X)), np.diff(indptr))
+    X_ij = np.ascontiguousarray(X[indices] - X[rows])
+    r2 = np.einsum("pk,pk->p", X_ij, X_ij)
+    w = np.ascontiguousarray(np.maximum(1.0 - r2 / (re * re), 0.0))
+    return indptr, indices, X_ij, w
