@@ -14,8 +14,9 @@
    through its own explicit step (:mod:`sph.relaxation`); :class:`~workbench.scenes.model.Modal`: the eigenproblem
    K φ = ω² M φ of the same tangent about X with lumped masses; :class:`~workbench.scenes.model.Explicit`:
    the method's fused time loop in chunks (contact: the generic velocity Verlet with the method's
-   force plus :mod:`sph.contact`), loads that vary in time updated at chunk midpoints (chunks of at
-   most :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
+   force plus :mod:`sph.contact`, weighted on the symmetry planes: :meth:`Run.mirror_planes`),
+   loads that vary in time updated at chunk midpoints (chunks of at most
+   :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
 5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`;
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
@@ -63,7 +64,7 @@ from workbench.scenes.params import SceneError
 from . import METHODS
 from .diagnostics import linear_momentum, period_amplitude
 from .monitor import Disorder, EnergyGrowth, energy_floor
-from .particles import Particles, discretise
+from .particles import TOL, Particles, discretise
 
 def jit_estimate(first_time: float, first_work: float, rest_time: float, rest_work: float) -> float:
     """The JIT compilation (and numba cache loading) in a loop's first chunk, s: its time less
@@ -591,7 +592,26 @@ class Run:
             if (o.stiffness, o.distance) != (c.stiffness, c.distance):
                 raise SceneError(f"contact {o.bodies}: stiffness and distance must equal those of "
                                  f"contact {c.bodies} (one penalty acts between all bodies)")
-        return (c.distance if c.distance is not None else self.ps.dx, c.stiffness)
+        return (c.distance if c.distance is not None else self.ps.dx, c.stiffness,
+                self.mirror_planes())
+
+    def mirror_planes(self):
+        """The contact's plane bit masks (:func:`sph.contact.mirror_planes`): a
+        :class:`~workbench.scenes.model.Roller` on a set whose shape is a
+        :class:`~workbench.scenes.shapes.Plane` with the roller's axis as its normal is a mirror
+        plane (a symmetry plane; a frictionless wall is one too); a contact pair of particles both
+        of its set and on the plane carries half its force. None without such planes."""
+        from workbench.scenes.shapes import Plane
+
+        from .contact import mirror_planes
+
+        shapes = {s.name: s.shape for s in self.model.sets}
+        planes = [(c.axis, shapes[c.set].at, self.ps.sets[c.set]) for c in self.model.constraints
+                  if isinstance(c, M.Roller) and isinstance(shapes.get(c.set), Plane)
+                  and shapes[c.set].axis == c.axis]
+        if not planes:
+            return None
+        return mirror_planes(self.ps.X, planes, TOL * self.ps.dx)  # the sets' own tolerance
 
 
 def scene_time_steps(method: str, scene, resolution: int, lattice: str | None = None,
