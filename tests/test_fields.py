@@ -37,3 +37,13 @@ def test_snapshot_renders_or_says_why(tmp_path):
         assert png is not None and png.stat().st_size > 1000
     else:
         assert png is None and "unavailable" in why
+
+
+def test_view_plane_shows_the_two_longest_axes():
+    """Snapshots show a 2-D body in its own plane and a 3-D body from the side of its two longest
+    axes (the RC beam's quarter model: long in x, deep in z, narrow in y → the x-z plane)."""
+    from workbench.fields import view_plane
+
+    assert view_plane((0, 1.0, 0, 0.2, 0, 0)) == (0, 1)
+    assert view_plane((0, 0.21, 0, 0.0375, -0.04, 0.16)) == (0, 2)
+    assert view_plane((0, 0.01, 0, 0.3, 0, 0.2)) == (1, 2)

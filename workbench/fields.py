@@ -102,6 +102,12 @@ def snapshot_png(vtk_file, png, scalars: str | None = None, title: str = "",
     import pyvista as pv
 
     mesh = pv.read(str(vtk_file))
+    plane = view_plane(mesh.bounds)
+    if plane != (0, 1):  # a 3-D body seen from the side: its two longest axes become x and y
+        mesh = mesh.copy()
+        mesh.points = mesh.points[:, [*plane, 3 - sum(plane)]]
+        if axes is not None:
+            axes = tuple(f"{'xyz'[k]} [m]" for k in plane)
     pl = pv.Plotter(off_screen=True, window_size=(900, 420))
     kw = dict(render_points_as_spheres=True, point_size=6) if isinstance(mesh, pv.PolyData) else {}
     bar = dict(title=label if label is not None else (scalars or ""))
@@ -119,6 +125,14 @@ def snapshot_png(vtk_file, png, scalars: str | None = None, title: str = "",
     pl.screenshot(str(png))
     pl.close()
     return Path(png)
+
+
+def view_plane(bounds) -> tuple[int, int]:
+    """The two axes (in order) a snapshot shows: the two of largest extent of ``bounds`` (xmin,
+    xmax, ymin, ymax, zmin, zmax): (0, 1) for a 2-D body, e.g. (0, 2) for a beam along x, deep in
+    z and narrow in y (the RC beam's quarter model seen from its side)."""
+    ext = [bounds[2 * k + 1] - bounds[2 * k] for k in range(3)]
+    return tuple(sorted(sorted(range(3), key=lambda k: -ext[k])[:2]))
 
 
 def _fit_xy(pl, bounds, window, left: float = 0.1, right: float = 0.8,

@@ -15,10 +15,11 @@ from . import report
 
 log = logging.getLogger("workbench")
 
-FIELD_RUNS = {"plate": {("csph", 10), ("fem", 4), ("fem", 8)}}
+FIELD_RUNS = {"plate": {("csph", 10), ("fem", 4), ("fem", 8)}, "rc_beam": {("csph", 8)}}
 """The runs of ``workbench verify`` that write field output (study -> (solver, resolution) pairs):
 the CSPH plate at H/Δx = 10 (in the quick ladder too) and the FEM plate's dynamic run (4 elements
-across H in the quick ladder, 8 in the full one; the modal-only rungs write nothing)."""
+across H in the quick ladder, 8 in the full one; the modal-only rungs write nothing); the RC
+beam's csph impacts at 12.5 mm (the quick one: specimen B)."""
 
 
 def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None,
