@@ -130,3 +130,48 @@ def test_energy_per_crack_area_scales_with_spacing_without_eq5(ladder):
     scaled = per_area * PAPER_SPACING / dx
     assert scaled.max() / scaled.min() - 1 <= TOL_SPREAD, scaled
     assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=TOL_SPREAD)
+
+
+# -- the RC beam study's measure (studies.rc_beam.crack_band_energy) ------------------------------
+def test_rc_beam_energy_per_crack_area_of_a_constructed_band():
+    """studies.rc_beam.crack_band_energy on the beam (B, 12.5 mm) with a constructed final history:
+    the mortar of the two lattice columns x = 5Δx, 6Δx (beyond the loading plate, whose bottom
+    layer takes the beam's top one) fully released (damage 1, W_r = g_F(Δx) =
+    ½ f_t ε_0(Δx)) and the released energy their Σ V W_r. In the full beam that is two cracks (the
+    quarter model's and its mirror image), each through the section less the bars' lattice lines:
+    crack area 2 (B H − 2 A_bar,lattice), and the energy per crack area exactly 2 G_F (closed form:
+    Σ V g_F / (Σ V/(2Δx)) = 2 Δx g_F). Then the rest of the mortar partly damaged with a further
+    energy W': the ratio grows by W'/W, the fully released share is W/(W + W')."""
+    from sph.driver import model_at
+    from sph.particles import discretise
+    from studies.rc_beam import crack_band_energy
+    from workbench.materials.mortar import H_DAMAGE, H_W_RELEASED, N_HISTORY, fracture_energy
+    from workbench.scenes import RCBeam
+
+    s = RCBeam(specimen="B")
+    model, dx = model_at(s, 8)
+    ps = discretise(model, 8)
+    mortar = ps.region == ps.region_names.index("mortar")
+    band = mortar & (np.abs(ps.X[:, 0] - 5.5 * dx) < dx)  # the columns x = 5 dx, 6 dx
+    gF = 0.5 * s.f_t * s.release_strain(dx)
+    h = np.zeros((ps.n, N_HISTORY))
+    h[band, H_DAMAGE] = 1.0
+    h[band, H_W_RELEASED] = gF
+    W = float(ps.V[band].sum()) * gF  # quarter model
+    out = crack_band_energy(s, 8, dict(history=h, released_energy=np.array([0.0, W])))
+    _, _, scale, _ = s.bars(dx)[0]
+    bar_lattice = s.bar_area / scale  # the bar's lattice lines: n dx²
+    assert out["crack_area"] == pytest.approx(2 * (s.B * s.H - 2 * bar_lattice), rel=1e-9)
+    GF = fracture_energy(s.f_t, s.release_strain(dx), dx)
+    assert out["released_per_crack_area_over_GF"] == pytest.approx(2.0, rel=1e-12)
+    assert out["released_per_crack_area"] == pytest.approx(2.0 * GF, rel=1e-12)
+    assert out["released_share_full"] == pytest.approx(1.0, rel=1e-12)
+    rest = mortar & ~band
+    h[rest, H_DAMAGE] = 0.5
+    h[rest, H_W_RELEASED] = 0.1 * gF
+    W2 = W + float(ps.V[rest].sum()) * 0.1 * gF
+    out = crack_band_energy(s, 8, dict(history=h, released_energy=np.array([0.0, W2])))
+    assert out["released_per_crack_area_over_GF"] == pytest.approx(2.0 * W2 / W, rel=1e-12)
+    assert out["released_share_full"] == pytest.approx(W / W2, rel=1e-12)
+    # no final history: NaN
+    assert np.isnan(crack_band_energy(s, 8, dict(released_energy=np.array([W])))["crack_area"])
