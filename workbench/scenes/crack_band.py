@@ -8,7 +8,8 @@ spacing Δx. 003 eq. 5 ties the release strain to the particle size, ε_0(Δx) =
 paper's 17 000 µ at 5 mm by 5 mm/Δx), and then the energy per crack area is n G_F whatever the
 spacing. This scene measures it (tests/test_crack_band.py).
 
-The bar (2-D, plane strain): −L/2 ≤ X ≤ L/2, |Y| ≤ B/2, of the mortar of :class:`RCBeam` (E, f_t,
+The bar (2-D, plane strain, or 3-D with ``dim`` = 3: |Z| ≤ B/2 too): −L/2 ≤ X ≤ L/2, |Y| ≤ B/2, of
+the mortar of :class:`RCBeam` (E, f_t,
 f_c of 003 Table 1; the release strain ``eps_release`` at 5 mm, scaled to the spacing with
 ``scale_release``) with ν = 0 by default, so that every particle of the band follows the law's
 uniaxial curve σ = f_t(ε_0 − ε)/(ε_0 − ε_cr), of area g_F = ½ f_t ε_0, whatever the band's lateral
@@ -72,9 +73,11 @@ class MortarBar(Scene):
     Resolution r: r particles across B (spacing B/r)."""
 
     name: str = field(default="mortar_bar", metadata=dict(hidden=True))
+    dim: int = param(2, "-", "2 (plane strain, B high) or 3 (a square section B x B)",
+                     choices=(2, 3))
     L: float = param(0.05, "m", "length (grips included)", lo=0, lo_open=True, hi=10)
-    B: float = param(0.02, "m", "height (the crack's length; area per unit thickness)", lo=0,
-                     lo_open=True, hi=10)
+    B: float = param(0.02, "m", "height (and width in 3-D): the crack's area is B (per unit "
+                     "thickness) or B^2", lo=0, lo_open=True, hi=10)
     grip: float = param(0.005, "m", "length of each elastic grip at the ends", lo=0, hi=5)
     E: float = param(11.9e9, "Pa", "Young's modulus (003 Table 1)", lo=0, lo_open=True)
     nu: float = param(0.0, "-", "Poisson's ratio (0: uniaxial softening curve in the band)",
@@ -138,30 +141,43 @@ class MortarBar(Scene):
         return (self.f_t / self.E * self.L + self.opening * u0) / self.rate
 
     # -- the model ----------------------------------------------------------------------------
+    @property
+    def area(self) -> float:
+        """The crack's area, the section: B (m² per m of thickness) in 2-D, B² in 3-D."""
+        return self.B if self.dim == 2 else self.B * self.B
+
     def model(self, spacing: float | None = None) -> m.Model:
         dx = self.B / 4 if spacing is None else spacing
-        L2, B2 = self.L / 2, self.B / 2
+        L2, B2, d = self.L / 2, self.B / 2, self.dim
+        cross = (B2,) * (d - 1)
+
+        def box(x0, x1):  # the bar between X = x0 and x1
+            return Box((x0,) + tuple(-c for c in cross), (x1,) + cross)
+
         grip = Material.svk(E=self.E, nu=self.nu, rho=self.rho)
         x0 = self.weak_section(dx)
         x1 = x0 + (self.weak_columns - 0.75) * dx
-        regions = [m.Region("weak", Box((x0 - 0.25 * dx, -B2), (x1, B2)),
-                            self.mortar(dx, self.weak), priority=2),
-                   m.Region("bar", Box((-L2, -B2), (L2, B2)), self.mortar(dx))]
+        regions = [m.Region("weak", box(x0 - 0.25 * dx, x1), self.mortar(dx, self.weak),
+                            priority=2),
+                   m.Region("bar", box(-L2, L2), self.mortar(dx))]
         if self.grip > 0:
             g = L2 - self.grip
-            regions += [m.Region("grip_left", Box((-L2, -B2), (-g, B2)), grip, priority=1),
-                        m.Region("grip_right", Box((g, -B2), (L2, B2)), grip, priority=1)]
+            regions += [m.Region("grip_left", box(-L2, -g), grip, priority=1),
+                        m.Region("grip_right", box(g, L2), grip, priority=1)]
         rate, L = self.rate, self.L
 
         def stretching(X):  # uniform stretching at the opening rate
-            return np.stack([rate * X[:, 0] / L, np.zeros(len(X))], axis=1)
+            v = np.zeros((len(X), d))
+            v[:, 0] = rate * X[:, 0] / L
+            return v
 
+        held = tuple(m.Roller(end, k) for end in ("left", "right") for k in range(1, d))
         return m.Model(
-            dim=2, plane="strain", length=self.B, name=self.name, regions=tuple(regions),
+            dim=d, plane="strain" if d == 2 else None, length=self.B, name=self.name,
+            regions=tuple(regions),
             sets=(m.Set("left", Plane(0, -L2)), m.Set("right", Plane(0, L2))),
             constraints=(m.Prescribed("left", 0, velocity=-0.5 * rate),
-                         m.Prescribed("right", 0, velocity=0.5 * rate),
-                         m.Roller("left", 1), m.Roller("right", 1)),
+                         m.Prescribed("right", 0, velocity=0.5 * rate)) + held,
             loads=(m.InitialVelocity(stretching),),
             drive=m.Explicit(self.duration(dx), self.dt_factor, n_out=self.n_out),
             observables=(m.Reaction("force", "right", 0), m.Displacement("opening", "right", 0)),
@@ -182,17 +198,17 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
 
     Returns ``G_F`` (J/m², :meth:`MortarBar.fracture_energy` at the run's spacing: eq. 5's energy
     per crack area of a band one particle wide); ``released_per_area`` (J/m², the released energy
-    at separation — :data:`SEPARATION` — over the crack area B per unit thickness; NaN if the bar
+    at separation — :data:`SEPARATION` — over the crack area A (:attr:`MortarBar.area`); NaN if the bar
     did not separate) and ``ratio`` (it over G_F: the particle layers the crack consumed);
     ``final_ratio`` (the same at the end of the run); ``released_layers`` (the fully released
-    mortar particles' volume over B Δx, at the end); ``full`` and ``partial`` (the history's
-    released energy Σ V W_r of the fully released particles and of the others over B G_F, at the
+    mortar particles' volume over A Δx, at the end); ``full`` and ``partial`` (the history's
+    released energy Σ V W_r of the fully released particles and of the others over A G_F, at the
     end; V the lattice volumes of :func:`sph.particles.discretise`); ``band`` (the lattice
     columns with a fully released particle, counted from the weak section's first);
     ``band_min_damage`` (the smallest damage — largest damage eigenvalue — over the mortar
     particles of those columns); ``separation_opening`` (the opening at separation over
     ε_0(Δx) Δx, past the elastic stretch);
-    ``peak_force`` (the largest force over f_t B); ``residual_force`` (the last record's |force|
+    ``peak_force`` (the largest force over f_t A); ``residual_force`` (the last record's |force|
     over the largest); ``spacing`` (m)."""
     from sph.particles import discretise
     from workbench.materials.mortar import H_DAMAGE, H_RELEASED, H_W_RELEASED
@@ -216,14 +232,15 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
     column = np.round((X[:, 0] - scene.weak_section(dx)) / dx).astype(int)
     band = sorted(set(column[released].tolist()))
     in_band = mortar & np.isin(column, band)
-    return dict(G_F=GF, released_per_area=W_sep / scene.B, ratio=W_sep / (scene.B * GF),
-                final_ratio=float(W[-1]) / (scene.B * GF),
-                released_layers=float(ps.V[released].sum()) / (scene.B * dx),
-                full=float(w[released].sum()) / (scene.B * GF),
-                partial=float(w[~released].sum()) / (scene.B * GF),
+    A = scene.area
+    return dict(G_F=GF, released_per_area=W_sep / A, ratio=W_sep / (A * GF),
+                final_ratio=float(W[-1]) / (A * GF),
+                released_layers=float(ps.V[released].sum()) / (A * dx),
+                full=float(w[released].sum()) / (A * GF),
+                partial=float(w[~released].sum()) / (A * GF),
                 band=band,
                 band_min_damage=float(h[in_band, H_DAMAGE].min()) if band else math.nan,
                 separation_opening=float(opening[sep[0]] / u0) if sep.size else math.nan,
-                peak_force=float(F[k]) / (scene.f_t * scene.B),
+                peak_force=float(F[k]) / (scene.f_t * A),
                 residual_force=float(F[-1] / F[k]) if F[k] > 0 else math.nan,
                 spacing=dx)
