@@ -674,27 +674,40 @@ def report_notes(ds: xr.Dataset) -> list[str]:
 
 def crack_band_notes(ds: xr.Dataset) -> list[str]:
     """Issue 12 gate 6 across the ladder's spacings, per specimen and solver: the energy released
-    per crack area over G_F and the largest mid-span displacement at each spacing, and the
-    displacement's trend (its change from each spacing to the next finer one)."""
+    per crack area over G_F (with the fully released fraction of the mortar and its share of the
+    released energy: where most of the mortar is released the damage is diffuse, not bands, and
+    the crack area is only the bands' equivalent) and the largest mid-span displacement at each
+    spacing, and the displacement's trend (its change from each spacing to the next finer one)."""
     if "released_per_crack_area_over_GF" not in ds:
         return []
     notes = []
     for sp in ds.specimen.values:
         for s in ds.solver.values:
             rows = []
+            stopped = []
             for r in ds.resolution.values:
                 sel = dict(solver=s, specimen=sp, resolution=r)
-                if str(ds.status.sel(**sel).values) == "not run":
+                st = str(ds.status.sel(**sel).values)
+                if st != "ok":  # not run, or stopped early: no end state to compare
+                    if st != "not run":
+                        stopped.append(f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:g} mm "
+                                       f"stopped ({st})")
                     continue
                 rows.append((float(ds.spacing.sel(resolution=r)),
                              float(ds.released_per_crack_area_over_GF.sel(**sel)),
                              float(ds.released_per_crack_area.sel(**sel)),
-                             float(ds.max_displacement.sel(**sel))))
+                             float(ds.max_displacement.sel(**sel)),
+                             sum(float(ds[f"cracked_{k}"].sel(**sel)) for k in ANGLE_BINS),
+                             float(ds.released_share_full.sel(**sel))))
             if not rows:
+                if stopped:
+                    notes.append(f"{sp}, {s}, energy released per crack area: {'; '.join(stopped)}.")
                 continue
             rows.sort(reverse=True)  # coarse to fine
-            text = "; ".join(f"dx = {dx * 1e3:g} mm: {e:.3g} G_F ({a:.4g} J/m^2), largest "
-                             f"displacement {w * 1e3:.4g} mm" for dx, e, a, w in rows)
+            text = "; ".join(f"dx = {dx * 1e3:g} mm: {e:.3g} G_F ({a:.4g} J/m^2; mortar fully "
+                             f"released {100 * c:.2g} %, holding {100 * f:.2g} % of the released "
+                             f"energy), largest displacement {w * 1e3:.4g} mm"
+                             for dx, e, a, w, c, f in rows)
             w = [row[3] for row in rows]
             if len(w) > 1 and np.isfinite(w).all():
                 steps = [f"{100 * (b / a - 1):+.1f} %" for a, b in zip(w, w[1:])]
@@ -702,6 +715,8 @@ def crack_band_notes(ds: xr.Dataset) -> list[str]:
                          "falls" if all(b < a for a, b in zip(w, w[1:])) else "is not monotonic")
                 text += (f". The largest displacement {trend} with refinement "
                          f"({', '.join(steps)} from each spacing to the next finer)")
+            if stopped:
+                text += ". " + "; ".join(stopped)
             notes.append(f"{sp}, {s}, energy released per crack area (crack band 2 dx; eq. 5 "
                          f"scaling {'on' if int(ds.attrs.get('param_scale_release', 1)) else 'off'}"
                          f"): {text}.")
