@@ -20,7 +20,10 @@ against the FEM's modal analysis of the same model (:data:`MODAL_RESOLUTION`); c
 (issue 12 gate 3) —
 the momentum of weight plus beam changes by exactly the supports' impulse, and the weight's
 initial kinetic energy equals kinetic + elastic + contact + plastic + released + viscous.
-Validation rows (shown, not gated): 003's largest mid-span displacement of B.
+Validation rows (shown, not gated): 003's largest mid-span displacement of B. Resolution
+(issue 12 gate 6, reported in the notes, not gated): the energy released per crack area
+(:func:`crack_band_energy`, the crack band two particles wide) and the largest displacement at each
+spacing of the ladder.
 
 ``--quick``: specimen B (:data:`QUICK_SPECIMENS`) at one coarse spacing (12.5 mm) over the first
 :data:`QUICK_T_END` of the impact.
@@ -311,6 +314,54 @@ def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray,
     return out
 
 
+CRACK_BAND_WIDTH = 2
+"""Width of a crack band in particle spacings: two lattice columns in csph and classic SPH (a
+particle's gradient is formed from its neighbours, not itself, so a jump between two columns is a
+strain of both; the mortar bar pulled apart, :mod:`workbench.scenes.crack_band`,
+tests/test_crack_band.py: the fully released particles are exactly the two columns, and the
+energy per crack area at 5, 3.33 and 2.5 mm 2.000 G_F with csph (nodal, 2-D and 3-D), 2.07–2.13
+with classic SPH)."""
+
+
+def crack_band_energy(scene: RCBeam, resolution: int, out: dict) -> dict:
+    """The energy released per crack area of a run (issue 12 gate 6), full beam (the quarter
+    model's × :attr:`RCBeam.copies`): the released energy at the end of the run, W (J), over the
+    crack area A = V_r/(:data:`CRACK_BAND_WIDTH` Δx) (m²), V_r the volume of the fully released
+    mortar particles (the damage tensor's largest eigenvalue ≥ :data:`CRACK_DAMAGE`, as the crack
+    classes; volumes of :func:`sph.particles.discretise`) — each crack consumes a band two
+    particles wide. Returns ``crack_area`` (m²), ``released_per_crack_area`` (J/m²),
+    ``released_per_crack_area_over_GF`` (over eq. 5's G_F(Δx) = ½ f_t ε_0(Δx) Δx,
+    :func:`workbench.materials.mortar.fracture_energy`: 2 where all the energy went into bands
+    of fully released particles, more where the mortar around them is partly damaged) and
+    ``released_share_full`` (the fully released particles' share of W, Σ V W_r over them / Σ V W_r
+    over all mortar). NaN without the final mortar history or without a released particle."""
+    from sph.driver import model_at
+    from sph.particles import discretise
+    from workbench.materials.mortar import H_DAMAGE, H_W_RELEASED, N_HISTORY, fracture_energy
+
+    nan = math.nan
+    res = dict(crack_area=nan, released_per_crack_area=nan, released_per_crack_area_over_GF=nan,
+               released_share_full=nan)
+    model, dx = model_at(scene, resolution)
+    ps = discretise(model, resolution)
+    h = out.get("history")
+    h = None if h is None else np.asarray(h, float)
+    if h is None or h.ndim != 2 or h.shape[0] != ps.n or h.shape[1] < N_HISTORY:
+        return res
+    mortar = ps.region == ps.region_names.index("mortar")
+    cracked = mortar & (h[:, H_DAMAGE] >= CRACK_DAMAGE)
+    c = float(scene.copies)
+    W = c * float(np.asarray(out["released_energy"], float)[-1])
+    w = np.where(mortar, h[:, H_W_RELEASED], 0.0) * ps.V
+    A = c * float(ps.V[cracked].sum()) / (CRACK_BAND_WIDTH * dx)
+    res["released_share_full"] = float(w[cracked].sum() / w.sum()) if w.sum() > 0 else nan
+    res["crack_area"] = A
+    if A > 0:
+        GF = fracture_energy(scene.f_t, scene.release_strain(dx), dx)
+        res.update(released_per_crack_area=W / A, released_per_crack_area_over_GF=W / (A * GF))
+    return res
+
+
 def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
     nan = math.nan
     s = dict(max_displacement=nan, residual_displacement=nan, max_impact_force=nan,
@@ -333,6 +384,7 @@ def run_summary(out: dict, scene: RCBeam, resolution: int) -> dict:
         c = crack_orientation(scene, resolution, np.asarray(out["x"]), out.get("history"))
         s.update({f"cracked_{k}": v for k, v in c["fraction"].items()})
         s.update({f"strain_cracked_{k}": v for k, v in c["strain_fraction"].items()})
+        s.update(crack_band_energy(scene, resolution, out))
     return s
 
 
@@ -355,6 +407,18 @@ SCALARS = dict(max_displacement=("m", "largest mid-span displacement"),
                                           f"{k} (largest principal residual strain above the "
                                           "release strain, along it)")
                   for k in ANGLE_BINS})
+CRACK_SCALARS = dict(
+    crack_area=("m^2", "crack area, full beam: fully released mortar volume / (2 dx), the crack "
+                "band two particles wide (workbench.scenes.crack_band)"),
+    released_per_crack_area=("J/m^2", "energy released by cracking at the end of the run over the "
+                             "crack area"),
+    released_per_crack_area_over_GF=("-", "released_per_crack_area over eq. 5's G_F(dx) = f_t "
+                                     "eps_0(dx) dx / 2 (2 for bands of fully released particles "
+                                     "alone)"),
+    released_share_full=("-", "share of the released energy in the fully released mortar "
+                         "particles"))
+"""Issue 12 gate 6, the energy released per crack area (:func:`crack_band_energy`)."""
+SCALARS.update(CRACK_SCALARS)
 
 
 def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | None = None,
@@ -610,6 +674,58 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                              f"it (x{b / a:.2f}). Validation (not gated): 003 reports about "
                              f"{PAPER[sp]['max_displacement'] * 1e3:g} and "
                              f"{PAPER[sp]['max_displacement_kernel_reduction'] * 1e3:g} mm (x2).")
+    notes += crack_band_notes(ds)
+    return notes
+
+
+def crack_band_notes(ds: xr.Dataset) -> list[str]:
+    """Issue 12 gate 6 across the ladder's spacings, per specimen and solver: the energy released
+    per crack area over G_F (with the fully released fraction of the mortar and its share of the
+    released energy: where most of the mortar is released the damage is diffuse, not bands, and
+    the crack area is only the bands' equivalent) and the largest mid-span displacement at each
+    spacing, and the displacement's trend (its change from each spacing to the next finer one)."""
+    if "released_per_crack_area_over_GF" not in ds:
+        return []
+    notes = []
+    for sp in ds.specimen.values:
+        for s in ds.solver.values:
+            rows = []
+            stopped = []
+            for r in ds.resolution.values:
+                sel = dict(solver=s, specimen=sp, resolution=r)
+                st = str(ds.status.sel(**sel).values)
+                if st != "ok":  # not run, or stopped early: no end state to compare
+                    if st != "not run":
+                        stopped.append(f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:g} mm "
+                                       f"stopped ({st})")
+                    continue
+                rows.append((float(ds.spacing.sel(resolution=r)),
+                             float(ds.released_per_crack_area_over_GF.sel(**sel)),
+                             float(ds.released_per_crack_area.sel(**sel)),
+                             float(ds.max_displacement.sel(**sel)),
+                             sum(float(ds[f"cracked_{k}"].sel(**sel)) for k in ANGLE_BINS),
+                             float(ds.released_share_full.sel(**sel))))
+            if not rows:
+                if stopped:
+                    notes.append(f"{sp}, {s}, energy released per crack area: {'; '.join(stopped)}.")
+                continue
+            rows.sort(reverse=True)  # coarse to fine
+            text = "; ".join(f"dx = {dx * 1e3:g} mm: {e:.3g} G_F ({a:.4g} J/m^2; mortar fully "
+                             f"released {100 * c:.2g} %, holding {100 * f:.2g} % of the released "
+                             f"energy), largest displacement {w * 1e3:.4g} mm"
+                             for dx, e, a, w, c, f in rows)
+            w = [row[3] for row in rows]
+            if len(w) > 1 and np.isfinite(w).all():
+                steps = [f"{100 * (b / a - 1):+.1f} %" for a, b in zip(w, w[1:])]
+                trend = ("grows" if all(b > a for a, b in zip(w, w[1:])) else
+                         "falls" if all(b < a for a, b in zip(w, w[1:])) else "is not monotonic")
+                text += (f". The largest displacement {trend} with refinement "
+                         f"({', '.join(steps)} from each spacing to the next finer)")
+            if stopped:
+                text += ". " + "; ".join(stopped)
+            notes.append(f"{sp}, {s}, energy released per crack area (crack band 2 dx; eq. 5 "
+                         f"scaling {'on' if int(ds.attrs.get('param_scale_release', 1)) else 'off'}"
+                         f"): {text}.")
     return notes
 
 
