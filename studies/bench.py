@@ -111,15 +111,21 @@ def scene_options(name: str, solver: str) -> dict:
 def resolution_for(name: str, scene, n_particles: int) -> int:
     """The resolution giving about ``n_particles``: the plate's closed form
     (:func:`plate_resolution`), else the particle count at :data:`PROBE_RESOLUTION` scaled by
-    (N/N_probe)^(1/dim)."""
+    (N/N_probe)^(1/dim), corrected once more from the count at that resolution (the parts made of
+    whole layers — rc_beam's weight, plate and supports — do not scale as r^dim)."""
     from sph import driver, particles
 
     if name == "plate":
         return plate_resolution(n_particles)
-    r0 = PROBE_RESOLUTION[name]
-    model, _ = driver.model_at(scene, r0)
-    n0 = particles.discretise(model, r0).n
-    return max(1, int(round(r0 * (n_particles / n0) ** (1.0 / model.dim))))
+    r = PROBE_RESOLUTION[name]
+    for _ in range(2):
+        model, _ = driver.model_at(scene, r)
+        n = particles.discretise(model, r).n
+        r_next = max(1, int(round(r * (n_particles / n) ** (1.0 / model.dim))))
+        if r_next == r:
+            break
+        r = r_next
+    return r
 
 
 def scene_body(name: str, solver: str, n_particles: int, law: str | None = None,
