@@ -38,9 +38,11 @@ def test_schema_and_units(bench_ds):
     for v in ds.data_vars.values():
         assert "units" in v.attrs
     for key in ("cpu_model", "cpu_count", "numba_version", "numba_threading_layer", "study",
-                "git_revision"):
+                "git_revision", "bench_scene", "bench_laws"):
         assert key in ds.attrs, key
     assert ds.attrs["study"] == "bench"
+    assert ds.attrs["bench_scene"] == "plate" and ds.attrs["bench_laws"] == "svk"
+    assert ds["resolution"].dims == ("solver", "particles")
 
 
 def test_values_are_sane(bench_ds):
@@ -60,6 +62,9 @@ def test_values_are_sane(bench_ds):
     (["bench", "--particles", "0"], "--particles: 0 is out of range"),
     (["bench", "--solver", "magic"], "--solver: 'magic' is not benchmarked"),
     (["bench", "--threads", "0"], "--threads: 0 is out of range"),
+    (["bench", "--scene", "magic"], "--scene: 'magic' is not benchmarked"),
+    (["bench", "--scene", "rc_beam", "--solver", "hpm"],
+     "--solver: 'hpm' is not benchmarked on rc_beam"),
 ])
 def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path):
     assert cli.main(argv + ["--out", str(tmp_path)]) == 2
@@ -75,3 +80,21 @@ def test_a_failed_measurement_is_a_status_not_a_crash():
     r = bench.measure("csph", 2000, 1, timeout=0.01)
     assert r["status"].startswith("error: timed out")
     assert math.isnan(bench.startup_time("hpm", 2000, timeout=0.01)["startup_time"])
+
+
+@pytest.mark.parametrize("scene,solver", [("microcantilever3d", "csph"), ("rc_beam", "csph"),
+                                          ("rc_beam", "sph")])
+def test_scene_harness_runs_the_scene(scene, solver):
+    """The 3-D scenes' harness (in process, one timed step at ~1000 particles): the scene's own
+    materials and options, about the requested particle count, a finite rate."""
+    from studies import bench
+
+    r = bench.particle_steps_per_second(solver, 1000, 1, steps=1, scene=scene)
+    assert r["status"] == "ok" and r["scene"] == scene and r["steps"] == 1
+    assert r["law"] == {"microcantilever3d": "j2", "rc_beam": "j2+mortar+svk"}[scene]
+    assert 500 <= r["n_particles"] <= 2000, r["n_particles"]  # "about N" from the probe's scaling
+    assert math.isfinite(r["particle_steps_per_second"]) and r["particle_steps_per_second"] > 0
+    sb = bench.scene_body(scene, solver, 1000)
+    assert sb.body.x.shape[1] == 3 and (sb.extra is not None) == (scene == "rc_beam")  # contact
+    with pytest.raises(ValueError, match="law"):
+        bench.scene_body(scene, solver, 1000, law="j2")

@@ -265,7 +265,8 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--budget", type=float, default=0.0,
                    help="seconds for extending unsettled convergence ladders (default 0: off)")
     v.set_defaults(fn=cmd_verify)
-    b = sub.add_parser("bench", help="particle-steps per second of the plate time loop")
+    b = sub.add_parser("bench", help="particle-steps per second of a scene's time loop")
+    b.add_argument("--scene", help="plate (default), microcantilever3d or rc_beam")
     b.add_argument("--solver", action="append")
     b.add_argument("--particles", action="append", type=int)
     b.add_argument("--threads", action="append", type=int)

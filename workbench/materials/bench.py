@@ -10,13 +10,14 @@ and not the memory traffic of an (n, 81) array). Times are the thread's CPU time
 * ``plastic``: a further step of 5e-4 along a proportional path from ε ≈ 0.02, every point yields;
 * ``elastic+tangent`` and ``plastic+tangent``: the same with the consistent tangent.
 
-``--baseline REV`` times the kernels of a git revision in the same run (its source is read with
-``git show REV:workbench/materials/kernels.py`` into a temporary module), so that the ratio of the
-two is measured under the same load of a shared machine (the two alternate within each round). The
-older layout had 10 parameters and 11 J2 history columns (revisions up to 23e34f0): the baseline
-gets those leading columns.
+``--baseline REV`` times the kernels of a git revision in the same run (its
+``workbench/materials`` modules are read with ``git show`` into a temporary package, see
+:func:`load_baseline`), so that the ratio of the two is measured under the same load of a shared
+machine (the two alternate within each round). The baseline gets the leading columns of its own
+layout (its ``N_PARAMS`` and ``N_HISTORY_J2``; revisions up to 23e34f0, without them, had 10
+parameters and 11 J2 history columns).
 
-    python3 -m workbench.materials.bench --baseline 23e34f0
+    python3 -m workbench.materials.bench --baseline afbb777
 """
 from __future__ import annotations
 
@@ -100,22 +101,30 @@ def points_per_second(kernel_modules, F, h_of, prm_of, tangent: bool, repeat: in
 
 
 def load_baseline(rev: str):
-    """The kernels module of git revision ``rev``, imported from a temporary file."""
+    """The kernels module of git revision ``rev``, imported from a temporary copy.
+
+    Since the library became a package (one module per law, relative imports), the revision's
+    ``workbench/materials/*.py`` are written into a temporary package ``workbench_kernels_<rev>``
+    (its ``__init__`` left empty: the dataclasses there are not needed) and its ``kernels`` is
+    imported from it; a revision with the single-file ``kernels.py`` loads the same way."""
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    src = subprocess.run(["git", "show", f"{rev}:workbench/materials/kernels.py"], cwd=root,
-                         check=True, capture_output=True, text=True).stdout
-    d = os.path.join(tempfile.gettempdir(), f"workbench_kernels_{rev}")
-    os.makedirs(d, exist_ok=True)
-    path = os.path.join(d, f"workbench_kernels_{rev}.py")
-    if not os.path.exists(path) or open(path).read() != src:
-        with open(path, "w") as f:
-            f.write(src)
+    git = lambda *a: subprocess.run(["git", *a], cwd=root, check=True, capture_output=True,
+                                    text=True).stdout
     name = f"workbench_kernels_{rev}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod  # numba's on-disk cache finds the module again by its name
-    spec.loader.exec_module(mod)
-    return mod
+    base = os.path.join(tempfile.gettempdir(), name)
+    pkg = os.path.join(base, name)
+    os.makedirs(pkg, exist_ok=True)
+    files = [f for f in git("ls-tree", "--name-only", rev, "workbench/materials/").split()
+             if f.endswith(".py") and not f.endswith(("__init__.py", "bench.py"))]
+    for f in files + ["__init__.py"]:
+        src = git("show", f"{rev}:{f}") if f in files else ""
+        path = os.path.join(pkg, os.path.basename(f))
+        if not os.path.exists(path) or open(path).read() != src:
+            with open(path, "w") as fh:
+                fh.write(src)
+    if base not in sys.path:
+        sys.path.insert(0, base)  # numba's on-disk cache finds the modules again by their names
+    return importlib.import_module(f"{name}.kernels")
 
 
 def run(baseline: str | None = None, n: int = 20_000, repeat: int = 15) -> dict:
@@ -123,11 +132,14 @@ def run(baseline: str | None = None, n: int = 20_000, repeat: int = 15) -> dict:
     st = states(n)
     prm = TABLE1_STEEL.params()
     mods = [kernels] + ([load_baseline(baseline)] if baseline else [])
-    prm_of = lambda k: prm if k == 0 else np.ascontiguousarray(prm[:BASELINE_N_PARAMS])
+    n_prm = getattr(mods[-1], "N_PARAMS", BASELINE_N_PARAMS)
+    n_hist = getattr(mods[-1], "N_HISTORY_J2", BASELINE_N_HISTORY)
+    prm_base = np.ascontiguousarray(prm[:n_prm])
+    prm_of = lambda k: prm if k == 0 else prm_base
     out = {}
     for case in CASES:
         F, h = st[case.split("+")[0]]
-        h_base = np.ascontiguousarray(h[:, :BASELINE_N_HISTORY])
+        h_base = np.ascontiguousarray(h[:, :n_hist])
         h_of = lambda k: h if k == 0 else h_base
         speeds = points_per_second(mods, F, h_of, prm_of, case.endswith("tangent"), repeat)
         out[case] = dict(zip(("current", "baseline"), speeds))

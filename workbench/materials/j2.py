@@ -16,9 +16,8 @@ import numpy as np
 from numba import njit
 
 from .layout import HIST_DAMAGE, HIST_EPS_P, HIST_W_P, HIST_W_REL, N_HISTORY_J2
-from .tensor import (EIG_GAP, INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, SERIES_TOL,
-                     _cofactor, _copy, _fail, _sym_mul, _sym_norm2, _sym_spectral, _zero, eigh3,
-                     exp_sym, log_spd)
+from .tensor import (EIG_GAP, INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor,
+                     _sym_norm2, eigh3, exp_sym, log_spd)
 
 # --------------------------------------------------------------------------------------------
 # finite-strain J2
@@ -27,12 +26,14 @@ from .tensor import (EIG_GAP, INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, SE
 def swift(C, eps0, n, eps_p):
     """Swift hardening σ_y = C (ε_p + ε0)^n (paper 000, Table 1) and its derivatives
     H = dσ_y/dε_p = n σ_y/(ε_p + ε0), H' = (n − 1) H/(ε_p + ε0) ≤ 0 and
-    H'' = (n − 2) H'/(ε_p + ε0) ≥ 0; |H'| and H'' decrease with ε_p."""
+    H'' = (n − 2) H'/(ε_p + ε0) ≥ 0; |H'| and H'' decrease with ε_p. The power as
+    exp(n ln(ε_p + ε0)): a few ulp (|n ln(ε_p + ε0)| ≲ 1), at half the cost of pow."""
     base = eps_p + eps0
-    sy = C * base ** n
-    H = n * sy / base
-    dH = (n - 1.0) * H / base
-    return sy, H, dH, (n - 2.0) * dH / base
+    sy = C * math.exp(n * math.log(base))
+    ib = 1.0 / base
+    H = n * sy * ib
+    dH = (n - 1.0) * H * ib
+    return sy, H, dH, (n - 2.0) * dH * ib
 
 
 @njit(**JIT)
@@ -70,7 +71,7 @@ def plastic_work(prm, eps_p, sy):
     return ((eps_p + prm[4]) * sy - prm[4] * prm[7]) / (prm[5] + 1.0)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol):
     """Plastic multiplier of the radial return in principal Kirchhoff space (de Souza Neto et al.
     2008, Box 14.3): the root Δγ of r(Δγ) = q_tr − 3μΔγ − σ_y(ε_p,n + Δγ).
@@ -104,12 +105,13 @@ def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol):
             hi = dg
         if hi - lo <= 4e-16 * hi:  # bracket at round-off: nothing better is representable
             return dg, sy, H, OK
-        s = 3.0 * mu + H
-        dN = r / s
+        i_s = 1.0 / (3.0 * mu + H)  # 1/s
+        dN = r * i_s
         if r > 0.0:  # left of the root: try the second-order step with its a-priori bound
-            kap = -0.5 * dH / s
+            kap = -0.5 * dH * i_s
             step = dN * (1.0 + kap * dN)
-            bound = -dH * kap * dN * dN * dN * (1.0 + 0.5 * kap * dN) + ddH * step * step * step / 6.0
+            bound = (-dH * kap * dN * dN * dN * (1.0 + 0.5 * kap * dN)
+                     + ddH * step * step * step * (1.0 / 6.0))
             if bound <= tol * sy and dg + step < hi:
                 return (dg + step, sy + step * (H + 0.5 * dH * step), H + dH * step, OK)
         if lo < dg + dN < hi:
@@ -120,10 +122,11 @@ def j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol):
     return dg, sy, H, NOT_CONVERGED
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _be_trial(F, h):
     """Elastic trial left Cauchy–Green tensor be_tr = F Cp⁻¹ Fᵀ, Cp⁻¹ = h[0:9] (row-major,
-    symmetric): its upper triangle (b00, b01, b02, b11, b12, b22)."""
+    symmetric; an array or a 9-tuple): its upper triangle (b00, b01, b02, b11, b12, b22).
+    Inlined by numba (see :func:`j2_point`)."""
     # T = F Cp⁻¹
     t00 = F[0, 0] * h[0] + F[0, 1] * h[3] + F[0, 2] * h[6]
     t01 = F[0, 0] * h[1] + F[0, 1] * h[4] + F[0, 2] * h[7]
@@ -172,8 +175,9 @@ def j2_tangent(A, P, Finv, n, u, x, tA, D):
     :func:`_theta`. Evaluated as A_ijkl = Σ_C c_C(i, j, k) u_C,l − F⁻¹_jk P_il, the three
     coefficients c_C formed once per (i, j, k).
 
-    A (3, 3, 3, 3) output; P (3, 3); Finv: F⁻¹ row-major 9-tuple; n, u: 3-tuples of 3-tuples;
-    x, tA: eigenvalues of be_tr and principal Kirchhoff stresses; D: 3-tuple of 3-tuples."""
+    A (3, 3, 3, 3) output; P: the stress, row-major 9-tuple; Finv: F⁻¹ row-major 9-tuple; n, u:
+    3-tuples of 3-tuples; x, tA: eigenvalues of be_tr and principal Kirchhoff stresses; D: 3-tuple
+    of 3-tuples."""
     th01 = _theta(x[0], x[1], tA[0], tA[1], D[0][0], D[0][1], D[1][1], D[1][0])
     th02 = _theta(x[0], x[2], tA[0], tA[2], D[0][0], D[0][2], D[2][2], D[2][0])
     th12 = _theta(x[1], x[2], tA[1], tA[2], D[1][1], D[1][2], D[2][2], D[2][1])
@@ -181,6 +185,10 @@ def j2_tangent(A, P, Finv, n, u, x, tA, D):
     u0, u1, u2 = u
     x0, x1, x2 = x
     for i in range(3):
+        # row i of P (a 9-tuple: selected, not indexed at run time)
+        pi0 = P[0] if i == 0 else (P[3] if i == 1 else P[6])
+        pi1 = P[1] if i == 0 else (P[4] if i == 1 else P[7])
+        pi2 = P[2] if i == 0 else (P[5] if i == 1 else P[8])
         for j in range(3):
             g0 = n0[i] * u0[j]
             g1 = n1[i] * u1[j]
@@ -196,39 +204,87 @@ def j2_tangent(A, P, Finv, n, u, x, tA, D):
                 c1 = s1 * n1[k] + x1 * (q01 * n0[k] + q12 * n2[k])
                 c2 = s2 * n2[k] + x2 * (q02 * n0[k] + q12 * n1[k])
                 f = Finv[3 * j + k]
-                for l in range(3):
-                    A[i, j, k, l] = c0 * u0[l] + c1 * u1[l] + c2 * u2[l] - f * P[i, l]
+                A[i, j, k, 0] = c0 * u0[0] + c1 * u1[0] + c2 * u2[0] - f * pi0
+                A[i, j, k, 1] = c0 * u0[1] + c1 * u1[1] + c2 * u2[1] - f * pi1
+                A[i, j, k, 2] = c0 * u0[2] + c1 * u1[2] + c2 * u2[2] - f * pi2
 
 
 @njit(**JIT)
-def failed_stress(cof, J, K, mode, P, A, want_tangent):
-    """Stress of a failed J2 point, D = ε_p/ε_L ≥ 1 (paper 000 eq. 36, "stress zero once
-    D ≥ 1"), by the failure mode prm[11]:
+def j2_point_tangent(A, P, Finv, be, K, mu, fac, cpl):
+    """The tangent of a J2 point in its elastic or plastic step (:func:`j2_tangent`), from the
+    closed-form eigen-decomposition of be_tr (:func:`eigh3`) and the principal algorithmic moduli
+    D_AB = ∂τ_A/∂ε_tr,B = K + 2μ fac (δ_AB − ⅓) + cpl s_A s_B (de Souza Neto et al. Box 14.3:
+    cpl = 4μ² (Δγ/q_tr − 1/(3μ + H)) (3/(2 q_tr))², 0 in an elastic step; s_A = 2μ dev ε_tr,A).
 
-    * 0 literal: P = 0 and A = 0, as printed;
+    A (3, 3, 3, 3) output; P: the stress, row-major 9-tuple; Finv: F⁻¹ row-major 9-tuple; be:
+    be_tr, 6-tuple; K, mu: bulk and shear moduli, Pa; fac = 1 − 3μΔγ/q_tr; cpl, Pa⁻¹·Pa² as
+    above."""
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(be[0], be[1], be[2],
+                                                                    be[3], be[4], be[5])
+    # principal trial log strains and stresses of the same state
+    e0 = 0.5 * math.log(x0)
+    e1 = 0.5 * math.log(x1)
+    e2 = 0.5 * math.log(x2)
+    tr = e0 + e1 + e2
+    pe = K * tr
+    s0 = 2.0 * mu * (e0 - tr / 3.0)
+    s1 = 2.0 * mu * (e1 - tr / 3.0)
+    s2 = 2.0 * mu * (e2 - tr / 3.0)
+    # u_A = F⁻¹ n_A
+    u0 = (Finv[0] * n0x + Finv[1] * n0y + Finv[2] * n0z,
+          Finv[3] * n0x + Finv[4] * n0y + Finv[5] * n0z,
+          Finv[6] * n0x + Finv[7] * n0y + Finv[8] * n0z)
+    u1 = (Finv[0] * n1x + Finv[1] * n1y + Finv[2] * n1z,
+          Finv[3] * n1x + Finv[4] * n1y + Finv[5] * n1z,
+          Finv[6] * n1x + Finv[7] * n1y + Finv[8] * n1z)
+    u2 = (Finv[0] * n2x + Finv[1] * n2y + Finv[2] * n2z,
+          Finv[3] * n2x + Finv[4] * n2y + Finv[5] * n2z,
+          Finv[6] * n2x + Finv[7] * n2y + Finv[8] * n2z)
+    dd = 2.0 * mu * fac
+    kd = K - dd / 3.0
+    D = ((kd + dd + cpl * s0 * s0, kd + cpl * s0 * s1, kd + cpl * s0 * s2),
+         (kd + cpl * s1 * s0, kd + dd + cpl * s1 * s1, kd + cpl * s1 * s2),
+         (kd + cpl * s2 * s0, kd + cpl * s2 * s1, kd + dd + cpl * s2 * s2))
+    j2_tangent(A, P, Finv, ((n0x, n0y, n0z), (n1x, n1y, n1z), (n2x, n2y, n2z)),
+               (u0, u1, u2), (x0, x1, x2), (pe + fac * s0, pe + fac * s1, pe + fac * s2), D)
+
+
+@njit(**JIT)
+def failed_stress(cof, J, K, mode):
+    """First Piola–Kirchhoff stress of a failed J2 point, D = ε_p/ε_L ≥ 1 (paper 000 eq. 36,
+    "stress zero once D ≥ 1"), by the failure mode prm[11]:
+
+    * 0 literal: P = 0, as printed;
     * 1 compression: only a compressive volumetric response is left, τ = K ln J I for J < 1 and
-      0 otherwise (no tension, no shear, but no interpenetration either): P = K ln J F⁻ᵀ,
-      A_ijkl = K F⁻ᵀ_ij F⁻ᵀ_kl − K ln J F⁻ᵀ_il F⁻ᵀ_kj (ψ = ½ K (ln J)², :func:`failed_energy`).
+      0 otherwise (no tension, no shear, but no interpenetration either): P = K ln J F⁻ᵀ
+      (ψ = ½ K (ln J)², :func:`failed_energy`; tangent :func:`failed_tangent`).
 
-    cof, J: cofactor J F⁻ᵀ (row-major 9-tuple) and J = det F; K: bulk modulus, Pa."""
+    cof, J: cofactor J F⁻ᵀ (row-major 9-tuple) and J = det F; K: bulk modulus, Pa. Returns P,
+    row-major 9-tuple, Pa."""
+    c = 0.0
     if mode == 1.0 and J < 1.0:
-        lnJ = math.log(J)
+        c = K * math.log(J) / J
+    return (c * cof[0], c * cof[1], c * cof[2], c * cof[3], c * cof[4], c * cof[5],
+            c * cof[6], c * cof[7], c * cof[8])
+
+
+@njit(**JIT)
+def failed_tangent(A, cof, J, K, mode):
+    """Tangent A_ijkl = ∂P_ij/∂F_kl of :func:`failed_stress`: 0 under the literal mode (and for
+    J ≥ 1), K F⁻ᵀ_ij F⁻ᵀ_kl − K ln J F⁻ᵀ_il F⁻ᵀ_kj under the compression mode for J < 1.
+    A (3, 3, 3, 3) output; cof, J, K, mode as :func:`failed_stress`."""
+    a = 0.0
+    b = 0.0
+    if mode == 1.0 and J < 1.0:
         iJ = 1.0 / J
-        c = K * lnJ * iJ
-        for i in range(3):
-            for j in range(3):
-                P[i, j] = c * cof[3 * i + j]
-        if want_tangent:
-            a = K * iJ * iJ
-            b = -K * lnJ * iJ * iJ
-            for i in range(3):
-                for j in range(3):
-                    for k in range(3):
-                        for l in range(3):
-                            A[i, j, k, l] = (a * cof[3 * i + j] * cof[3 * k + l]
-                                             + b * cof[3 * i + l] * cof[3 * k + j])
-    else:
-        _zero(P, A, want_tangent)
+        a = K * iJ * iJ
+        b = -K * math.log(J) * iJ * iJ
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                for l in range(3):
+                    A[i, j, k, l] = (a * cof[3 * i + j] * cof[3 * k + l]
+                                     + b * cof[3 * i + l] * cof[3 * k + j])
 
 
 @njit(**JIT)
@@ -242,6 +298,22 @@ def failed_energy(J, K, mode):
 
 
 @njit(**JIT)
+def _fill(A, v):
+    """A (3, 3, 3, 3) := v."""
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                for l in range(3):
+                    A[i, j, k, l] = v
+
+
+# the three outcomes of a J2 point, by which the end of j2_point writes P, the history and A
+_J2_STEP = 0  # an elastic or plastic step of the J2 law
+_FAILED = 1  # D ≥ 1, earlier or in this step: failed_stress
+_INVALID = 2  # J ≤ 0 or a non-positive trial stretch: NaN
+
+
+@njit(**JIT)
 def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     """Finite-strain J2, exponential-map return mapping (de Souza Neto et al. Box 14.3) with the
     consistent tangent dP/dF (P = τ F⁻ᵀ; dτ from the isotropic function τ(be_tr), Box A.6).
@@ -250,157 +322,152 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
     its deviator by fac = 1 − 3μΔγ/q_tr, and the exponential map is be = exp(tr ε_tr·⅔) ·
     exp(fac dev ln be_tr) (:func:`exp_sym`), Cp⁻¹ = F⁻¹ be F⁻ᵀ. An elastic step (trial state
     inside the yield surface) skips the return mapping and the exponential map. The tangent alone
-    needs the eigen-decomposition of be_tr (:func:`eigh3`), formed only with ``want_tangent``.
+    needs the eigen-decomposition of be_tr (:func:`j2_point_tangent`), formed only with
+    ``want_tangent``.
 
     h_old, h_new: (n_history ≥ 13,) = [Cp⁻¹ row-major, ε_p, D, W_p, W_rel, ...] (W_p:
     :func:`plastic_work`; W_rel: the stored energy ψ_e − ψ_failed released in the step in which
     the point fails, J/m³; further columns, of wider laws of a table, carried). Allocation-free.
+
+    Written for speed: F, h_old and prm are read once at the start (into tuples), the computation
+    runs on scalars and tuples, and P, h_new and A are written once at the end; without the
+    tangent it makes no call that numba does not inline (:func:`_cofactor`, :func:`_be_trial`,
+    :func:`log_spd`, :func:`exp_sym`, :func:`j2_return_map` are inlined, and no tuple is indexed at
+    run time). numba holds a reference on an array argument across any call it cannot inline and
+    any bounds check that may raise (an atomic increment and decrement, ≈ 8 ns per array and
+    point); so only A, written through the tangent's calls, keeps one.
     """
-    lam = prm[1]
     mu = prm[2]
     epsL = prm[6]
     tol = prm[9]
-    K = lam + 2.0 * mu / 3.0
-
+    mode = prm[11]
+    K = prm[1] + (2.0 / 3.0) * mu
+    row = (prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8], prm[9],
+           prm[10], prm[11])
+    cp = (h_old[0], h_old[1], h_old[2], h_old[3], h_old[4], h_old[5], h_old[6], h_old[7],
+          h_old[8])
+    eps_p = h_old[HIST_EPS_P]
+    dmg = h_old[HIST_DAMAGE]
+    W_p = h_old[HIST_W_P]
+    W_rel = h_old[HIST_W_REL]
+    for m in range(N_HISTORY_J2, h_old.shape[0]):  # columns of wider laws: carried
+        h_new[m] = h_old[m]
     cof, J = _cofactor(F)
-    if not J > 0.0:
-        _fail(P, A, want_tangent)
-        _copy(h_old, h_new)
-        return INVERTED
-    if h_old[HIST_DAMAGE] >= 1.0:  # failed earlier (000 eq. 36): history frozen
-        failed_stress(cof, J, K, prm[11], P, A, want_tangent)
-        _copy(h_old, h_new)
-        return OK
-
-    be = _be_trial(F, h_old)
-    L, ok = log_spd(be)  # 2 ε_tr
-    if not ok:
-        _fail(P, A, want_tangent)
-        _copy(h_old, h_new)
-        return INVERTED
+    be = _be_trial(F, cp)
     iJ = 1.0 / J
     Finv = (cof[0] * iJ, cof[3] * iJ, cof[6] * iJ,
             cof[1] * iJ, cof[4] * iJ, cof[7] * iJ,
             cof[2] * iJ, cof[5] * iJ, cof[8] * iJ)
 
-    # trial Hencky stress: τ = K tr ε I + 2μ dev ε, ε = ½ L; q = √(3/2) |dev τ|
-    trL = L[0] + L[3] + L[5]
-    m3 = trL / 3.0
-    dL = (L[0] - m3, L[1], L[2], L[3] - m3, L[4], L[5] - m3)
-    tre = 0.5 * trL
-    p = K * tre
-    dn2 = _sym_norm2(dL)
-    q_tr = mu * math.sqrt(1.5 * dn2)
-
-    eps_p_n = h_old[HIST_EPS_P]
     status = OK
+    case = _J2_STEP
     plastic = False
-    sy = prm[7]  # σ_y(0) ≤ σ_y(ε_p): below it the step is elastic without evaluating σ_y(ε_p)
-    H = 0.0
-    dH = 0.0
-    ddH = 0.0
-    if q_tr > sy:
-        sy, H, dH, ddH = yield_stress(prm, eps_p_n)
-        plastic = q_tr - sy > tol * sy
-    dg = 0.0
     fac = 1.0
-    if plastic:
-        dg, sy, H, status = j2_return_map(q_tr, mu, prm, eps_p_n, sy, H, dH, ddH, tol)
-        fac = 1.0 - 3.0 * mu * dg / q_tr
-    c = mu * fac
-    t00 = p + c * dL[0]
-    t01 = c * dL[1]
-    t02 = c * dL[2]
-    t11 = p + c * dL[3]
-    t12 = c * dL[4]
-    t22 = p + c * dL[5]
-    # P = τ F⁻ᵀ
-    P[0, 0] = t00 * Finv[0] + t01 * Finv[1] + t02 * Finv[2]
-    P[0, 1] = t00 * Finv[3] + t01 * Finv[4] + t02 * Finv[5]
-    P[0, 2] = t00 * Finv[6] + t01 * Finv[7] + t02 * Finv[8]
-    P[1, 0] = t01 * Finv[0] + t11 * Finv[1] + t12 * Finv[2]
-    P[1, 1] = t01 * Finv[3] + t11 * Finv[4] + t12 * Finv[5]
-    P[1, 2] = t01 * Finv[6] + t11 * Finv[7] + t12 * Finv[8]
-    P[2, 0] = t02 * Finv[0] + t12 * Finv[1] + t22 * Finv[2]
-    P[2, 1] = t02 * Finv[3] + t12 * Finv[4] + t22 * Finv[5]
-    P[2, 2] = t02 * Finv[6] + t12 * Finv[7] + t22 * Finv[8]
-
-    if plastic:
-        # exponential map: be = exp(2 ε_e) = exp(tr L/3) exp(fac dev L); Cp⁻¹ = F⁻¹ be F⁻ᵀ
-        E = exp_sym((fac * dL[0], fac * dL[1], fac * dL[2], fac * dL[3], fac * dL[4], fac * dL[5]))
-        v = math.exp(m3)
-        e00 = v * E[0]; e01 = v * E[1]; e02 = v * E[2]
-        e11 = v * E[3]; e12 = v * E[4]; e22 = v * E[5]
-        # T = F⁻¹ be (row i of F⁻¹ times be), then Cp⁻¹ = T F⁻ᵀ (upper triangle, mirrored)
-        r00 = Finv[0] * e00 + Finv[1] * e01 + Finv[2] * e02
-        r01 = Finv[0] * e01 + Finv[1] * e11 + Finv[2] * e12
-        r02 = Finv[0] * e02 + Finv[1] * e12 + Finv[2] * e22
-        r10 = Finv[3] * e00 + Finv[4] * e01 + Finv[5] * e02
-        r11 = Finv[3] * e01 + Finv[4] * e11 + Finv[5] * e12
-        r12 = Finv[3] * e02 + Finv[4] * e12 + Finv[5] * e22
-        r20 = Finv[6] * e00 + Finv[7] * e01 + Finv[8] * e02
-        r21 = Finv[6] * e01 + Finv[7] * e11 + Finv[8] * e12
-        r22 = Finv[6] * e02 + Finv[7] * e12 + Finv[8] * e22
-        c01 = r00 * Finv[3] + r01 * Finv[4] + r02 * Finv[5]
-        c02 = r00 * Finv[6] + r01 * Finv[7] + r02 * Finv[8]
-        c12 = r10 * Finv[6] + r11 * Finv[7] + r12 * Finv[8]
-        h_new[0] = r00 * Finv[0] + r01 * Finv[1] + r02 * Finv[2]
-        h_new[1] = c01
-        h_new[2] = c02
-        h_new[3] = c01
-        h_new[4] = r10 * Finv[3] + r11 * Finv[4] + r12 * Finv[5]
-        h_new[5] = c12
-        h_new[6] = c02
-        h_new[7] = c12
-        h_new[8] = r20 * Finv[6] + r21 * Finv[7] + r22 * Finv[8]
-        eps_p = eps_p_n + dg
-        h_new[HIST_EPS_P] = eps_p
-        h_new[HIST_DAMAGE] = eps_p / epsL  # ε_L = inf gives D = 0
-        h_new[HIST_W_P] = plastic_work(prm, eps_p, sy)
-        h_new[HIST_W_REL] = h_old[HIST_W_REL]
-        for m in range(N_HISTORY_J2, h_old.shape[0]):  # columns of wider laws: carried
-            h_new[m] = h_old[m]
-        if h_new[HIST_DAMAGE] >= 1.0:  # fails in this step: its stored energy is released
-            psi_e = 0.25 * mu * fac * fac * dn2 + 0.5 * K * tre * tre
-            h_new[HIST_W_REL] += psi_e - failed_energy(J, K, prm[11])
-            failed_stress(cof, J, K, prm[11], P, A, want_tangent)
-            return status
+    dg = 0.0
+    q_tr = 0.0
+    H = 0.0
+    nan = np.nan
+    Pt = (nan, nan, nan, nan, nan, nan, nan, nan, nan)
+    if not J > 0.0:
+        case = _INVALID
+        status = INVERTED
+    elif dmg >= 1.0:  # failed earlier (000 eq. 36): history frozen
+        case = _FAILED
+        Pt = failed_stress(cof, J, K, mode)
     else:
-        _copy(h_old, h_new)
+        L, ok = log_spd(be)  # 2 ε_tr
+        if not ok:
+            case = _INVALID
+            status = INVERTED
+        else:
+            # trial Hencky stress: τ = K tr ε I + 2μ dev ε, ε = ½ L; q = √(3/2) |dev τ|
+            trL = L[0] + L[3] + L[5]
+            m3 = trL * (1.0 / 3.0)
+            dL = (L[0] - m3, L[1], L[2], L[3] - m3, L[4], L[5] - m3)
+            tre = 0.5 * trL
+            p = K * tre
+            dn2 = _sym_norm2(dL)
+            # σ_y(0) ≤ σ_y(ε_p): below it the step is elastic without evaluating σ_y(ε_p) (or
+            # q_tr: q_tr² = 3/2 μ² |dev L|² against σ_y(0)²)
+            sy = row[7]
+            if 1.5 * mu * mu * dn2 > sy * sy:
+                q_tr = mu * math.sqrt(1.5 * dn2)
+                sy, H, dH, ddH = yield_stress(row, eps_p)
+                plastic = q_tr - sy > tol * sy
+                if plastic:
+                    dg, sy, H, status = j2_return_map(q_tr, mu, row, eps_p, sy, H, dH, ddH, tol)
+                    fac = 1.0 - 3.0 * mu * dg / q_tr
+            c = mu * fac
+            t00 = p + c * dL[0]
+            t01 = c * dL[1]
+            t02 = c * dL[2]
+            t11 = p + c * dL[3]
+            t12 = c * dL[4]
+            t22 = p + c * dL[5]
+            # P = τ F⁻ᵀ
+            Pt = (t00 * Finv[0] + t01 * Finv[1] + t02 * Finv[2],
+                  t00 * Finv[3] + t01 * Finv[4] + t02 * Finv[5],
+                  t00 * Finv[6] + t01 * Finv[7] + t02 * Finv[8],
+                  t01 * Finv[0] + t11 * Finv[1] + t12 * Finv[2],
+                  t01 * Finv[3] + t11 * Finv[4] + t12 * Finv[5],
+                  t01 * Finv[6] + t11 * Finv[7] + t12 * Finv[8],
+                  t02 * Finv[0] + t12 * Finv[1] + t22 * Finv[2],
+                  t02 * Finv[3] + t12 * Finv[4] + t22 * Finv[5],
+                  t02 * Finv[6] + t12 * Finv[7] + t22 * Finv[8])
+            if plastic:
+                # exponential map: be = exp(2 ε_e) = exp(tr L/3) exp(fac dev L);
+                # Cp⁻¹ = F⁻¹ be F⁻ᵀ
+                E = exp_sym((fac * dL[0], fac * dL[1], fac * dL[2], fac * dL[3], fac * dL[4],
+                             fac * dL[5]))
+                v = math.exp(m3)
+                e00 = v * E[0]; e01 = v * E[1]; e02 = v * E[2]
+                e11 = v * E[3]; e12 = v * E[4]; e22 = v * E[5]
+                # T = F⁻¹ be (row i of F⁻¹ times be), then Cp⁻¹ = T F⁻ᵀ (upper triangle,
+                # mirrored)
+                r00 = Finv[0] * e00 + Finv[1] * e01 + Finv[2] * e02
+                r01 = Finv[0] * e01 + Finv[1] * e11 + Finv[2] * e12
+                r02 = Finv[0] * e02 + Finv[1] * e12 + Finv[2] * e22
+                r10 = Finv[3] * e00 + Finv[4] * e01 + Finv[5] * e02
+                r11 = Finv[3] * e01 + Finv[4] * e11 + Finv[5] * e12
+                r12 = Finv[3] * e02 + Finv[4] * e12 + Finv[5] * e22
+                r20 = Finv[6] * e00 + Finv[7] * e01 + Finv[8] * e02
+                r21 = Finv[6] * e01 + Finv[7] * e11 + Finv[8] * e12
+                r22 = Finv[6] * e02 + Finv[7] * e12 + Finv[8] * e22
+                c01 = r00 * Finv[3] + r01 * Finv[4] + r02 * Finv[5]
+                c02 = r00 * Finv[6] + r01 * Finv[7] + r02 * Finv[8]
+                c12 = r10 * Finv[6] + r11 * Finv[7] + r12 * Finv[8]
+                cp = (r00 * Finv[0] + r01 * Finv[1] + r02 * Finv[2], c01, c02,
+                      c01, r10 * Finv[3] + r11 * Finv[4] + r12 * Finv[5], c12,
+                      c02, c12, r20 * Finv[6] + r21 * Finv[7] + r22 * Finv[8])
+                eps_p += dg
+                dmg = eps_p / epsL  # ε_L = inf gives D = 0
+                W_p = plastic_work(row, eps_p, sy)
+                if dmg >= 1.0:  # fails in this step: its stored energy is released
+                    psi_e = 0.25 * mu * fac * fac * dn2 + 0.5 * K * tre * tre
+                    W_rel += psi_e - failed_energy(J, K, mode)
+                    case = _FAILED
+                    Pt = failed_stress(cof, J, K, mode)
 
+    P[0, 0] = Pt[0]; P[0, 1] = Pt[1]; P[0, 2] = Pt[2]
+    P[1, 0] = Pt[3]; P[1, 1] = Pt[4]; P[1, 2] = Pt[5]
+    P[2, 0] = Pt[6]; P[2, 1] = Pt[7]; P[2, 2] = Pt[8]
+    h_new[0] = cp[0]; h_new[1] = cp[1]; h_new[2] = cp[2]
+    h_new[3] = cp[3]; h_new[4] = cp[4]; h_new[5] = cp[5]
+    h_new[6] = cp[6]; h_new[7] = cp[7]; h_new[8] = cp[8]
+    h_new[HIST_EPS_P] = eps_p
+    h_new[HIST_DAMAGE] = dmg
+    h_new[HIST_W_P] = W_p
+    h_new[HIST_W_REL] = W_rel
     if want_tangent:
-        x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(be[0], be[1], be[2],
-                                                                        be[3], be[4], be[5])
-        # principal trial log strains and stresses of the same state
-        e0 = 0.5 * math.log(x0)
-        e1 = 0.5 * math.log(x1)
-        e2 = 0.5 * math.log(x2)
-        tr = e0 + e1 + e2
-        pe = K * tr
-        s0 = 2.0 * mu * (e0 - tr / 3.0)
-        s1 = 2.0 * mu * (e1 - tr / 3.0)
-        s2 = 2.0 * mu * (e2 - tr / 3.0)
-        # u_A = F⁻¹ n_A
-        u0 = (Finv[0] * n0x + Finv[1] * n0y + Finv[2] * n0z,
-              Finv[3] * n0x + Finv[4] * n0y + Finv[5] * n0z,
-              Finv[6] * n0x + Finv[7] * n0y + Finv[8] * n0z)
-        u1 = (Finv[0] * n1x + Finv[1] * n1y + Finv[2] * n1z,
-              Finv[3] * n1x + Finv[4] * n1y + Finv[5] * n1z,
-              Finv[6] * n1x + Finv[7] * n1y + Finv[8] * n1z)
-        u2 = (Finv[0] * n2x + Finv[1] * n2y + Finv[2] * n2z,
-              Finv[3] * n2x + Finv[4] * n2y + Finv[5] * n2z,
-              Finv[6] * n2x + Finv[7] * n2y + Finv[8] * n2z)
-        # principal algorithmic moduli D_AB = ∂τ_A/∂ε_tr,B
-        cpl = 0.0
-        if plastic:
-            cpl = 4.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + H)) * (1.5 / q_tr) ** 2
-        dd = 2.0 * mu * fac
-        kd = K - dd / 3.0
-        D = ((kd + dd + cpl * s0 * s0, kd + cpl * s0 * s1, kd + cpl * s0 * s2),
-             (kd + cpl * s1 * s0, kd + dd + cpl * s1 * s1, kd + cpl * s1 * s2),
-             (kd + cpl * s2 * s0, kd + cpl * s2 * s1, kd + dd + cpl * s2 * s2))
-        j2_tangent(A, P, Finv, ((n0x, n0y, n0z), (n1x, n1y, n1z), (n2x, n2y, n2z)),
-                   (u0, u1, u2), (x0, x1, x2), (pe + fac * s0, pe + fac * s1, pe + fac * s2), D)
+        if case == _J2_STEP:
+            cpl = 0.0
+            if plastic:
+                cpl = 4.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + H)) * (1.5 / q_tr) ** 2
+            j2_point_tangent(A, Pt, Finv, be, K, mu, fac, cpl)
+        elif case == _FAILED:
+            failed_tangent(A, cof, J, K, mode)
+        else:
+            _fill(A, np.nan)
     return status
 
 

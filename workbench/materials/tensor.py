@@ -28,9 +28,10 @@ NEWTON_MAXIT = 200
 # --------------------------------------------------------------------------------------------
 # small helpers
 # --------------------------------------------------------------------------------------------
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _cofactor(F):
-    """Cofactor matrix cof(F) = J F⁻ᵀ (row-major 9-tuple) and J = det F."""
+    """Cofactor matrix cof(F) = J F⁻ᵀ (row-major 9-tuple) and J = det F. Inlined by numba, as
+    :func:`log_spd` and :func:`exp_sym` are (see :func:`workbench.materials.j2.j2_point`)."""
     f00 = F[0, 0]; f01 = F[0, 1]; f02 = F[0, 2]
     f10 = F[1, 0]; f11 = F[1, 1]; f12 = F[1, 2]
     f20 = F[2, 0]; f21 = F[2, 1]; f22 = F[2, 2]
@@ -209,6 +210,12 @@ def eigh3(a00, a01, a02, a11, a12, a22):
             c * wx - sn * ux, c * wy - sn * uy, c * wz - sn * uz)
 
 
+# eigh3 inlined by numba where it is a rare fallback inside an inlined routine (log_spd, exp_sym):
+# a call there would make their callers hold references on their array arguments (see
+# workbench.materials.j2.j2_point); the same function, compiled into the caller
+_eigh3_inlined = njit(inline="always", **JIT)(eigh3.py_func)
+
+
 @njit(**JIT)
 def eig_sym3_closed(a, V):
     """:func:`eigh3` on arrays: a (3, 3) symmetric (its upper triangle is read), overwritten by
@@ -229,6 +236,14 @@ def eig_sym3_closed(a, V):
 LOG_SERIES_MAX = 0.2
 EXP_SERIES_MAX = 0.25
 SERIES_TOL = 2.0 ** -56  # relative truncation error of both series (an eighth of eps)
+# exp_sym's number of terms from ‖D‖_F² alone (no square root, no division in the loop): the
+# first K ≥ 1 with d^K/K! ≤ SERIES_TOL is the first with d² ≤ EXP_TERMS_D2[K] =
+# (SERIES_TOL K!)^(2/K) (increasing in K; EXP_TERMS_D2[13] > EXP_SERIES_MAX²). Arrays, not
+# tuples: a tuple indexed at run time carries a bounds check whose exception path keeps numba's
+# reference counts in the caller (see workbench.materials.j2.j2_point).
+EXP_TERMS_D2 = np.array([0.0] + [(SERIES_TOL * math.factorial(k)) ** (2.0 / k)
+                                 for k in range(1, 16)])
+RECIPROCALS = np.array([0.0] + [1.0 / k for k in range(1, 32)])  # 1/k: the series' coefficients
 
 
 @njit(**JIT)
@@ -260,7 +275,7 @@ def _sym_spectral(x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z):
             x0 * n0z * n0z + x1 * n1z * n1z + x2 * n2z * n2z)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def log_spd(b):
     """Matrix logarithm of a symmetric positive definite 3×3 b (6-tuple) → (ln b as a 6-tuple,
     ok). ok is False when b is not positive definite (or not finite).
@@ -295,42 +310,42 @@ def log_spd(b):
         while t > lim * (2 * K + 1):
             t *= z
             K += 1
-        c = 1.0 / (2 * K - 1)
+        c = RECIPROCALS[2 * K - 1]
         S = (c, 0.0, 0.0, c, 0.0, c)
         for k in range(K - 2, -1, -1):
             S = _sym_mul(Z, S)
-            c = 1.0 / (2 * k + 1)
+            c = RECIPROCALS[2 * k + 1]
             S = (S[0] + c, S[1], S[2], S[3] + c, S[4], S[5] + c)
         L = _sym_mul(Y, S)
         return (2.0 * L[0], 2.0 * L[1], 2.0 * L[2], 2.0 * L[3], 2.0 * L[4], 2.0 * L[5]), True
-    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(b00, b01, b02, b11, b12, b22)
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = _eigh3_inlined(b00, b01, b02, b11,
+                                                                             b12, b22)
     if not (x0 > 0.0 and x1 > 0.0 and x2 > 0.0):
         return (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan), False
     return _sym_spectral(math.log(x0), math.log(x1), math.log(x2),
                          n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z), True
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def exp_sym(D):
     """Matrix exponential of a symmetric 3×3 D (6-tuple) → 6-tuple.
 
-    The Taylor series Σ D^k/k! (Horner, terms while ‖D‖^k/k! > 2⁻⁵⁶) while ‖D‖_F ≤
-    EXP_SERIES_MAX (at most 13 terms: the return mapping's elastic deviator of metals); beyond,
-    the spectral form Σ exp(d_A) n_A ⊗ n_A (:func:`eigh3`)."""
-    d = math.sqrt(_sym_norm2(D))
-    if d <= EXP_SERIES_MAX:
-        K = 0
-        t = 1.0
-        while t > SERIES_TOL:
+    The Taylor series Σ D^k/k! (Horner, terms while ‖D‖^k/k! > 2⁻⁵⁶, their number K read from
+    ‖D‖_F² and EXP_TERMS_D2) while ‖D‖_F ≤ EXP_SERIES_MAX (K ≤ 13: the return mapping's elastic
+    deviator of metals); beyond, the spectral form Σ exp(d_A) n_A ⊗ n_A (:func:`eigh3`)."""
+    d2 = _sym_norm2(D)
+    if d2 <= EXP_SERIES_MAX * EXP_SERIES_MAX:
+        K = 1
+        while d2 > EXP_TERMS_D2[K]:
             K += 1
-            t *= d / K
-        c = 1.0 / K
+        c = RECIPROCALS[K]
         E = (1.0 + c * D[0], c * D[1], c * D[2], 1.0 + c * D[3], c * D[4], 1.0 + c * D[5])
         for k in range(K - 1, 0, -1):
             E = _sym_mul(D, E)
-            c = 1.0 / k
+            c = RECIPROCALS[k]
             E = (1.0 + c * E[0], c * E[1], c * E[2], 1.0 + c * E[3], c * E[4], 1.0 + c * E[5])
         return E
-    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(D[0], D[1], D[2], D[3], D[4], D[5])
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = _eigh3_inlined(D[0], D[1], D[2],
+                                                                             D[3], D[4], D[5])
     return _sym_spectral(math.exp(x0), math.exp(x1), math.exp(x2),
                          n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z)
