@@ -317,7 +317,7 @@ def crack_orientation(scene: RCBeam, resolution: int, x: np.ndarray,
 CRACK_BAND_WIDTH = 2
 """Width of a crack band in particle spacings: two lattice columns in csph and classic SPH (a
 particle's gradient is formed from its neighbours, not itself, so a jump between two columns is a
-strain of both; the mortar bar pulled apart, :mod:`workbench.scenes.crack_band`,
+strain of both; the mortar bar pulled apart, :mod:`studies.crack_band`,
 tests/test_crack_band.py: the fully released particles are exactly the two columns, and the
 energy per crack area at 5, 3.33 and 2.5 mm 2.000 G_F with csph (nodal, 2-D and 3-D), 2.07–2.13
 with classic SPH)."""

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from studies import rc_beam
-from workbench.scenes.crack_band import MortarBar, crack_band
+from studies.crack_band import crack_band
+from workbench.scenes.crack_band import MortarBar
 from workbench.scenes.rc_beam import PAPER_SPACING
 
 RESOLUTIONS = (4, 6, 8)
