@@ -27,7 +27,9 @@ particle methods' one driver :func:`sph.driver.solve`, with the same result keys
    :class:`Table`); :class:`Traction` and :class:`Pressure` on the set's boundary facets
    (consistent nodal forces), :class:`PointLoad` at the probe point (consistent nodal forces; on a
    set of nodes, shared equally), :class:`BodyForce` ρ g on the elements of its regions, each with
-   its ``scale`` function; :class:`InitialVelocity` at the nodes of its regions.
+   its ``scale`` function; :class:`InitialVelocity` at the nodes of its regions. The option
+   ``lumped_mass`` adds rigid masses carried by faces (:func:`lump_mass`: a body pressed on a face,
+   e.g. a drop weight while its contact stays compressive), with their initial velocity.
 4. **drive** — :class:`Static`: :func:`~fem_reference.static.load_path` along ``drive.path`` (Newton
    with line search, increments halved on failure), observables at each value; :class:`Modal`: the
    lowest ``n_modes`` eigenpairs about the reference state (:mod:`.modal`); :class:`Explicit`:
@@ -40,7 +42,9 @@ particle methods' one driver :func:`sph.driver.solve`, with the same result keys
    deforming mode; when none is found, Δt = t_end/max(n_out, 20). Mass-proportional damping as in
    the drive.
    Observables are recorded about ``n_out`` times, the Displacement histories behind
-   :class:`Period` observables at every step.
+   :class:`Period` observables at every step. ``initial_tangent``: Newton's iteration matrix is
+   the initial effective matrix, factorised once (:func:`fem_reference.dynamic.newmark`): for
+   small-displacement runs, one factorisation instead of one or two per step.
 5. **observables** — :class:`Displacement` (probe, or the mean over the set's nodes weighted by
    ∫N_a dV), :class:`Position` (the same of the current coordinate), :class:`Reaction` (the force
    the constraints exert on the set, the sum of f_int − f_ext over the set's constrained DOFs of
@@ -106,7 +110,8 @@ ELEMENTS = {"q9": (2, 2), "quad9": (2, 2), "q4": (2, 1), "quad4": (2, 1),
             "hex27": (3, 2), "hex8": (3, 1)}
 """Element names: (dimension, polynomial order)."""
 
-OPTIONS = ("rtol", "maxit", "max_increment", "min_increment", "steps_per_period", "field_frames")
+OPTIONS = ("rtol", "maxit", "max_increment", "min_increment", "steps_per_period", "field_frames",
+           "lumped_mass", "initial_tangent")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -141,6 +146,7 @@ class FemModel:
     element: str = ""
     prescribed: list = field(default_factory=list)  # (dofs, displacement fn, velocity fn)
     velocity_holders: list = field(default_factory=list)  # (_Holder, velocity fn)
+    nodal_velocity: list = field(default_factory=list)  # (scalar nodes, velocity (d,)): lump_mass
 
     @property
     def d(self) -> int:
@@ -450,6 +456,45 @@ def _loads(fm: FemModel) -> None:
             loads.body(rho_e, np.asarray(ld.acceleration, float), s)
 
 
+def lump_mass(fm: FemModel, set_name: str, mass: float, velocity=None) -> np.ndarray:
+    """A rigid mass carried by a face: ``mass`` (kg) lumped onto the nodes of the set ``set_name``
+    in proportion to ∫_Γ N_a dA over its boundary facets (the consistent shares of a uniform
+    surface density; positive for the Lagrange elements used here), or in equal shares where the
+    set holds no boundary facet (a line, a point); every component of a node carries its share
+    (``fm.problem.nodal_mass``, added to the consistent mass: :meth:`Problem.mass`). Those nodes
+    start with ``velocity`` (d,), m/s (None: at rest; the constrained DOFs at their prescribed
+    rate). What it models: a body of that mass moving with the face — e.g. a weight pressed on a
+    loading plate while their contact stays compressive — as a distributed inertia that does not
+    stiffen the face. Returns the lumped mass per scalar node (n_nodes,), kg."""
+    if not (math.isfinite(mass) and mass > 0):
+        raise ValueError(f"lumped_mass: mass {mass!r} is out of range; allowed: (0, inf) kg")
+    disc, d = fm.disc, fm.d
+    if set_name not in fm.nodes:
+        raise ValueError(f"lumped_mass: set {set_name!r} is not a set of the model; allowed: "
+                         f"{', '.join(fm.nodes)}")
+    nodes = fm.nodes[set_name]
+    fac = fm.facets[set_name]
+    share = np.zeros(fm.X.shape[1])
+    if len(fac):
+        e0 = np.zeros(d)
+        e0[0] = 1.0
+        share = disc.traction_load(fac, e0)[::d].copy()
+        share[np.setdiff1d(np.arange(len(share)), nodes)] = 0.0
+    if not share.sum() > 0:
+        share = np.zeros(fm.X.shape[1])
+        share[nodes] = 1.0
+    lumped = mass * share / share.sum()
+    extra = np.repeat(lumped, d)
+    p = fm.problem
+    p.nodal_mass = extra if p.nodal_mass is None else p.nodal_mass + extra
+    if velocity is not None:
+        vel = np.asarray(velocity, float)
+        if vel.shape != (d,):
+            raise ValueError(f"lumped_mass: velocity {tuple(vel)} needs {d} components")
+        fm.nodal_velocity.append((np.flatnonzero(share > 0), vel))
+    return lumped
+
+
 # ------------------------------------------------------------------------------------------------
 # Observables
 # ------------------------------------------------------------------------------------------------
@@ -674,6 +719,8 @@ def _initial_velocity(fm: FemModel, dt: float) -> np.ndarray:
             idx = np.flatnonzero(nodes)
             vel = ld.velocity
             v[idx] = vel(fm.X[:, idx].T) if callable(vel) else np.asarray(vel, float)
+    for idx, vel in fm.nodal_velocity:
+        v[idx] = vel
     v = v.ravel()
     v[disc.fixed] = 0.0
     for dofs, disp, vel in fm.prescribed:
@@ -741,7 +788,7 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
     try:
         run = newmark(fm.problem, v0, dt, n_steps, observe=history, rtol=options.get("rtol", 1e-9),
                       maxit=options.get("maxit", 20), snapshot=snap, callback=callback,
-                      damping=drive.damping)
+                      damping=drive.damping, initial_tangent=options.get("initial_tangent", False))
         status = run["status"]
     except Exception as err:  # a failed run is a result
         run = None
@@ -800,13 +847,19 @@ def solve_model(scene, resolution: int, drive=None, element=None, fbar=None, del
     ``<scene>_fem_H<resolution>.pvd`` — one frame per load value of a static drive, about
     ``field_frames`` frames of an explicit one, none of a modal one. ``options``: ``rtol``,
     ``maxit``, ``max_increment``, ``min_increment`` (Newton and load stepping),
-    ``steps_per_period`` (Newmark), ``field_frames``."""
+    ``steps_per_period`` (Newmark), ``field_frames``, ``lumped_mass`` (a sequence of (set name,
+    mass kg, initial velocity (d,) or None): rigid masses carried by faces, :func:`lump_mass`),
+    ``initial_tangent`` (Newmark by modified Newton with the initial effective matrix factorised
+    once, :func:`fem_reference.dynamic.newmark`)."""
     bad = sorted(set(options) - set(OPTIONS))
     if bad:
         raise ValueError(f"{bad[0]}: not an option of the FEM; allowed: {', '.join(OPTIONS)}, "
                          "drive, element, fbar, deletion, fields")
     t0 = time.perf_counter()
+    lumped = options.pop("lumped_mass", ())
     fm = build(scene, resolution, drive, element, fbar, deletion)
+    for spec in lumped:
+        lump_mass(fm, *spec)
     model = fm.model
     name = None
     if fields is not None:

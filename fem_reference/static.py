@@ -69,7 +69,9 @@ class Problem:
     :class:`fem_reference.boundary.Loads`); ``point_loads``, a sequence of (x (d,), force (d,))
     pairs, adds point forces on the nodes at x, scaled by λ like f_ext. The element formulation
     (standard or F-bar) is the discretisation's (``disc.fbar``). ``deletion``: False, True (=
-    'any'), 'any' or 'all': delete failed elements by that criterion (module docstring)."""
+    'any'), 'any' or 'all': delete failed elements by that criterion (module docstring).
+    ``nodal_mass`` (N,), kg per DOF, or None: a lumped (diagonal) mass added to the consistent mass
+    of the elements — a rigid body carried by nodes (:func:`fem_reference.model.lump_mass`)."""
 
     disc: Discretisation
     material: Material | MaterialTable
@@ -79,6 +81,7 @@ class Problem:
     point_loads: tuple = ()
     mat_id: np.ndarray | None = None
     deletion: bool | str = False
+    nodal_mass: np.ndarray | None = None
 
     def __post_init__(self):
         disc = self.disc
@@ -128,8 +131,12 @@ class Problem:
         return self.table.rho(self.mat_id)
 
     def mass(self) -> sp.csr_matrix:
-        """Consistent mass matrix (N × N) of the active elements."""
-        return self.disc.mass(self.rho())
+        """Consistent mass matrix (N × N) of the active elements, plus ``nodal_mass`` on the
+        diagonal."""
+        M = self.disc.mass(self.rho())
+        if self.nodal_mass is not None:
+            M = (M + sp.diags(np.asarray(self.nodal_mass, float))).tocsr()
+        return M
 
     def external(self, lam: float) -> np.ndarray:
         """The external force vector (N,) at load parameter λ."""
@@ -350,11 +357,15 @@ class TangentSolver:
 
 def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: float = 1e-9,
            maxit: int = 25, extra_matrix=None, extra_rhs: Callable | None = None,
-           solver: TangentSolver | None = None) -> NewtonResult:
+           solver: TangentSolver | None = None, fixed_matrix: Callable | None = None
+           ) -> NewtonResult:
     """Solve r(u) = f_int(u) − f_ext(λ) [+ extra_rhs(u)] = 0 on the free DOFs from the guess u0
     (fixed DOFs already set in u0). ``extra_matrix`` (free × free) is added to the tangent and
     ``extra_rhs(u)`` (N,) to the residual (the inertia of an implicit time step). ``solver``
-    (a :class:`TangentSolver`, kept across the steps of a run) solves the linear systems."""
+    (a :class:`TangentSolver`, kept across the steps of a run) solves the linear systems.
+    ``fixed_matrix``: a callable b ↦ A⁻¹ b with a fixed iteration matrix A (free × free, the
+    extra matrix included) — modified Newton: the tangent is neither assembled nor factorised;
+    the residual is the full one, so the converged answer is the same (linear convergence)."""
     solver = TangentSolver() if solver is None else solver
     disc = problem.disc
     free = disc.free
@@ -395,12 +406,15 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
             res.reason = f"no convergence in {maxit} iterations (residual {rn:.2e})"
             break
         t0 = time.perf_counter()
-        K = problem.tangent(pt)
-        if extra_matrix is not None:
-            K = K + extra_matrix
+        if fixed_matrix is None:
+            K = problem.tangent(pt)
+            if extra_matrix is not None:
+                K = K + extra_matrix
         t1 = time.perf_counter()
-        # near convergence the tangent barely changes: the last factors precondition GMRES
-        du_f = solver.solve(K, -rf, rtol=min(1e-3, 0.1 * rn), near=rn < 1e-2)
+        if fixed_matrix is not None:
+            du_f = fixed_matrix(-rf)
+        else:  # near convergence the tangent barely changes: the last factors precondition GMRES
+            du_f = solver.solve(K, -rf, rtol=min(1e-3, 0.1 * rn), near=rn < 1e-2)
         res.solve_time += time.perf_counter() - t1
         res.assembly_time += t1 - t0
         du = np.zeros_like(u)
