@@ -305,8 +305,9 @@ class CSPH(ParticleBody):
 
     def field_state(self) -> dict:
         F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
+        # V: the volumes of the stored energy and the work (dissipated), m³ (m² in 2-D)
         return dict(t=self.t, x=self.x, v=self.v, F=F, history=self.tl.history,
-                    mat_id=self.tl.mat_id, region=self.particles.region)
+                    mat_id=self.tl.mat_id, region=self.particles.region, V=self._V_work)
 
 
 def build(particles, **options) -> CSPH:

@@ -43,6 +43,7 @@ build, loads), ``jit_time`` (:func:`jit_estimate`), ``total_time`` (the whole ca
 (explicit: the time loop alone, JIT included), ``n_particles``, ``dt``, ``steps``, the final state
 (explicit: ``X``, ``x`` (N, d) m, ``region`` (N,) with ``region_names``, ``sets`` name →
 indices, ``history`` the final material history (rows as the body's field state),
+``volume`` (N,) the volumes its work columns are integrated with, m³, where the body says,
 ``failed_particles`` (N,) bool where the model observes failure, ``component`` (N,) the connected
 parts where the method reports them, :meth:`sph.method.ParticleBody.components`), and the scene's
 quantities.
@@ -128,8 +129,9 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
     ``lattice`` overrides the model's ('node' or 'cell'); ``drive`` replaces the model's (e.g.
     ``Modal()`` for the linearised periods of a dynamic scene); ``static``: 'newton' (default) or
     'dr' (dynamic relaxation, for the cost comparison); ``fields`` (a folder, or None) writes the
-    ParaView series ``<scene>_<method>_H<resolution>.pvd``; ``on_record(body, run, t)`` (explicit
-    drives) is called at every record, t = 0 included, to look at the state in between (e.g.
+    ParaView series ``<scene>_<method>_H<resolution>.pvd``; ``on_record(body, run, t)`` is called
+    at every record of an explicit drive, t = 0 included, and at every equilibrium of a static
+    one (t the load parameter), to look at the state in between (e.g.
     :mod:`studies.stability_theory`); the other ``options`` go to the method's ``build``."""
     import dataclasses
 
@@ -145,7 +147,7 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
     snap_name = series_name(scene.name, method, resolution)
     with threads_for(ps.n):
         if isinstance(model.drive, M.Static):
-            out = run.static(fields, snap_name, t0, static)
+            out = run.static(fields, snap_name, t0, static, on_record)
         elif isinstance(model.drive, M.Modal):
             out = run.modal()
         else:
@@ -292,7 +294,7 @@ class Run:
         return float(np.count_nonzero(failed[sel]) / max(1, np.count_nonzero(sel)))
 
     # -- static --------------------------------------------------------------------------------
-    def static(self, fields, snap_name, t0, method: str = "newton") -> dict:
+    def static(self, fields, snap_name, t0, method: str = "newton", on_record=None) -> dict:
         from .static import Constraints, solve_path
 
         tlb = self.body.gradient_form()  # None: dynamic relaxation by the method's own step
@@ -324,6 +326,8 @@ class Run:
             out["iterations"][k] = its
             out["wall_time"][k] = time.perf_counter() - t_start
             its_at.append((k, its))
+            if on_record is not None:
+                on_record(self.body, self, lam)
             bar.update(1)
             if snap:
                 state["lam"] = lam
@@ -554,6 +558,8 @@ class Run:
                    region_names=list(ps.region_names),
                    sets={k: np.asarray(v).copy() for k, v in ps.sets.items()},
                    history=np.array(body.field_state().get("history", np.zeros((ps.n, 0)))))
+        if body.field_state().get("V") is not None:  # the volumes of the history's work columns
+            out["volume"] = np.array(body.field_state()["V"])
         parts = body.components()
         if parts is not None:
             out["component"] = np.asarray(parts)

@@ -13,7 +13,7 @@ STUDIES = {
     "rc_beam": "studies.rc_beam",
 }
 # The studies that `workbench verify` runs, in order.
-HEADLINE = ("ss_curve", "cantilever", "plate", "stability", "rc_beam")
+HEADLINE = ("ss_curve", "cantilever", "plate", "stability", "rc_beam", "microcantilever")
 
 
 def get(name: str):

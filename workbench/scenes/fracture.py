@@ -20,6 +20,15 @@ the set of points within half its thickness of the bisector plane of the two nea
 those are consecutive grains (:class:`GrainBoundary`). With seeds ordered along the beam, each
 grain meets only its neighbours, so there are ``n_grains − 1`` boundaries, as in Fig. 2.
 
+Crack band (``band`` > 0, Bažant & Oh 1983): the damage D = ε_p/ε_L fails a band one particle
+wide, so the energy a crack dissipates per unit area is Δx·g(ε_L), g the energy per unit volume
+spent to failure — the literal rule's goes to zero with the spacing (Bažant & Belytschko 1985).
+Tying ε_L to a fixed band width b keeps it: the limit of the material where the low ε_L applies
+becomes ε_L,eff with Δx·g(ε_L,eff) = b·g(ε_L) (:func:`crack_band_limit`; ε_L as given at Δx = b),
+g the area under the uniaxial stress–strain curve of the J2 law to failure
+(:func:`band_energy_density`). A band narrower than Δx·g(0)/g(ε_L) has no such ε_L (a failure at
+first yield would already release more: Bažant's snap-back limit): refused.
+
 Observables: ``force`` the reaction on the loading patch (the time mean over each output
 interval, :mod:`sph.driver`), ``support`` the reaction on the held faces, ``deflection`` the
 patch's mean displacement, and the failed fraction of all particles, of the grains, of the grain
@@ -42,6 +51,39 @@ TABLE2_E = (222e9, 212e9, 202e9, 192e9, 182e9)
 """000 Table 2: Young's moduli of the five grains, Pa (the grain at the support first)."""
 TABLE3_E = 202e9
 """000 Table 3: Young's modulus of the grain boundaries, Pa."""
+
+
+def band_energy_density(material: Material, eps_L: float) -> float:
+    """g(ε_L), J/m³: the energy a unit volume of a J2 material spends until it fails at ε_p = ε_L
+    under uniaxial stress — the area under its stress–strain curve to failure with a vertical
+    drop there (Bažant & Oh 1983, the crack band's G_f/w_c): the plastic work
+    W_p(ε_L) = ∫₀^{ε_L} σ_y dε_p (:func:`workbench.materials.j2.plastic_work`, closed form) plus
+    the elastic energy released by the drop, σ_y(ε_L)²/(2E)."""
+    from ..materials.j2 import plastic_work
+
+    sy = float(material.yield_stress(eps_L))
+    return float(plastic_work(material.params(), float(eps_L), sy)) + sy * sy / (2.0 * material.E)
+
+
+def crack_band_limit(material: Material, eps_L: float, band: float, spacing: float) -> float:
+    """The limit plastic strain ε_L,eff that a band of failed particles one ``spacing`` (m) wide
+    needs to spend the energy per unit crack area of a band ``band`` (m) wide failing at
+    ``eps_L``: spacing·g(ε_L,eff) = band·g(ε_L), g = :func:`band_energy_density` (increasing, so
+    the root is unique; bisection to 1e-12 relative). SceneError where no ε_L ≥ 0 does it: band
+    below spacing·g(0)/g(ε_L)."""
+    target = band / spacing * band_energy_density(material, eps_L)
+    g0 = band_energy_density(material, 0.0)
+    if not target > g0:
+        raise SceneError(f"band: {band:g} m is out of range; allowed: 0 or above "
+                         f"{spacing * g0 / band_energy_density(material, eps_L):.4g} m at the "
+                         f"spacing {spacing:g} m (a failure at first yield would release more)")
+    lo, hi = 0.0, max(eps_L, 1e-6)
+    while band_energy_density(material, hi) < target:
+        lo, hi = hi, 2.0 * hi
+    while hi - lo > 1e-12 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if band_energy_density(material, mid) < target else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 @dataclass(frozen=True)
@@ -103,7 +145,9 @@ class MicroCantilever(Scene):
     eps_L_high: float = param(1.0, "-", "limit plastic strain elsewhere", lo=0, lo_open=True)
     failure: str = param("compression", "-", "failed particle: keeps compression, or literal (stress 0)",
                          choices=("compression", "literal"))
-    band: float = param(0.0, "m", "crack-band width (0: eps_L as given; > 0: eps_L scaled by band/spacing)", lo=0)
+    band: float = param(0.0, "m", "crack-band width (0: eps_L as given; > 0: the low eps_L raised so "
+                        "that the energy per crack area is that of a band this wide, crack_band_limit)",
+                        lo=0)
     velocity: float = param(0.2, "m/s", "downward velocity of the loading patch", lo=0, lo_open=True)
     t_ramp: float = param(5e-7, "s", "time over which the velocity is ramped up", lo=0, lo_open=True)
     t_end: float = param(5e-6, "s", "simulated time", lo=0, lo_open=True)
@@ -149,22 +193,27 @@ class MicroCantilever(Scene):
             return Box((-self.block, -self.B, bottom), (0.0, self.B, top))
         return Box((-self.block, bottom), (0.0, top))
 
-    def limits(self, spacing: float) -> tuple[float, float]:
-        """(ε_L of the grains, ε_L of the grain boundaries) for the case, crack-band scaled."""
-        low, high = self.eps_L_low, self.eps_L_high
-        if self.band > 0:
-            low *= self.band / spacing
-        return (high, low) if self.case == "inter" else (low, high)
+    def limits(self, spacing: float) -> tuple[tuple[float, ...], float]:
+        """(ε_L of each grain, ε_L of the grain boundaries) for the case at ``spacing`` (m): the
+        low limit where the case puts it, crack-band scaled when ``band`` > 0
+        (:func:`crack_band_limit`, with each material's own modulus)."""
+        grains, gb = self.materials(spacing)
+        return tuple(g.eps_L for g in grains), gb.eps_L
 
     def materials(self, spacing: float):
-        eps_grain, eps_gb = self.limits(spacing)
-        j2 = dict(nu=self.nu, C=self.C, eps0=self.eps0, n=self.n, rho=self.rho)
-        grains = [Material.j2(E=TABLE2_E[k % len(TABLE2_E)], eps_L=eps_grain, **j2) for k in range(self.n_grains)]
-        gb = Material.j2(E=self.E_gb, eps_L=eps_gb, **j2)
-        if self.failure != "compression":
-            grains = [g.replace(failure=self.failure) for g in grains]
-            gb = gb.replace(failure=self.failure)
-        return grains, gb
+        """(the grains' materials, the grain boundaries' material) at ``spacing`` (m)."""
+        j2 = dict(nu=self.nu, C=self.C, eps0=self.eps0, n=self.n, rho=self.rho, failure=self.failure)
+        grains = [Material.j2(E=TABLE2_E[k % len(TABLE2_E)], **j2) for k in range(self.n_grains)]
+        gb = Material.j2(E=self.E_gb, **j2)
+
+        def limited(mat, low):
+            eps = self.eps_L_low if low else self.eps_L_high
+            if low and self.band > 0:
+                eps = crack_band_limit(mat, eps, self.band, spacing)
+            return mat.replace(eps_L=eps)
+
+        inter = self.case == "inter"
+        return [limited(g, not inter) for g in grains], limited(gb, inter)
 
     def model(self, spacing: float | None = None) -> m.Model:
         dx = self.H / 10 if spacing is None else spacing
