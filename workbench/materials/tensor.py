@@ -210,12 +210,6 @@ def eigh3(a00, a01, a02, a11, a12, a22):
             c * wx - sn * ux, c * wy - sn * uy, c * wz - sn * uz)
 
 
-# eigh3 inlined by numba where it is a rare fallback inside an inlined routine (log_spd, exp_sym):
-# a call there would make their callers hold references on their array arguments (see
-# workbench.materials.j2.j2_point); the same function, compiled into the caller
-_eigh3_inlined = njit(inline="always", **JIT)(eigh3.py_func)
-
-
 @njit(**JIT)
 def eig_sym3_closed(a, V):
     """:func:`eigh3` on arrays: a (3, 3) symmetric (its upper triangle is read), overwritten by
@@ -239,8 +233,8 @@ SERIES_TOL = 2.0 ** -56  # relative truncation error of both series (an eighth o
 # exp_sym's number of terms from ‖D‖_F² alone (no square root, no division in the loop): the
 # first K ≥ 1 with d^K/K! ≤ SERIES_TOL is the first with d² ≤ EXP_TERMS_D2[K] =
 # (SERIES_TOL K!)^(2/K) (increasing in K; EXP_TERMS_D2[13] > EXP_SERIES_MAX²). Arrays, not
-# tuples: a tuple indexed at run time carries a bounds check whose exception path keeps numba's
-# reference counts in the caller (see workbench.materials.j2.j2_point).
+# tuples: indexed at run time without a bounds check (a tuple's can raise, an exception path in
+# every inlining caller).
 EXP_TERMS_D2 = np.array([0.0] + [(SERIES_TOL * math.factorial(k)) ** (2.0 / k)
                                  for k in range(1, 16)])
 RECIPROCALS = np.array([0.0] + [1.0 / k for k in range(1, 32)])  # 1/k: the series' coefficients
@@ -318,8 +312,7 @@ def log_spd(b):
             S = (S[0] + c, S[1], S[2], S[3] + c, S[4], S[5] + c)
         L = _sym_mul(Y, S)
         return (2.0 * L[0], 2.0 * L[1], 2.0 * L[2], 2.0 * L[3], 2.0 * L[4], 2.0 * L[5]), True
-    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = _eigh3_inlined(b00, b01, b02, b11,
-                                                                             b12, b22)
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(b00, b01, b02, b11, b12, b22)
     if not (x0 > 0.0 and x1 > 0.0 and x2 > 0.0):
         return (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan), False
     return _sym_spectral(math.log(x0), math.log(x1), math.log(x2),
@@ -345,7 +338,6 @@ def exp_sym(D):
             c = RECIPROCALS[k]
             E = (1.0 + c * E[0], c * E[1], c * E[2], 1.0 + c * E[3], c * E[4], 1.0 + c * E[5])
         return E
-    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = _eigh3_inlined(D[0], D[1], D[2],
-                                                                             D[3], D[4], D[5])
+    x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(D[0], D[1], D[2], D[3], D[4], D[5])
     return _sym_spectral(math.exp(x0), math.exp(x1), math.exp(x2),
                          n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z)
