@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from .layout import HIST_DAMAGE, HIST_EPS_P, HIST_W_P, HIST_W_REL, N_HISTORY_J2
-from .tensor import (EIG_GAP, INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor,
+from .tensor import (EIG_GAP, INVERTED, JIT, NEWTON_MAXIT, NOT_CONVERGED, OK, _cofactor, _fail,
                      _sym_norm2, eigh3, exp_sym, log_spd)
 
 # --------------------------------------------------------------------------------------------
@@ -211,7 +211,7 @@ def j2_point_tangent(A, P, Finv, be, K, mu, fac, cpl):
     cpl = 4μ² (Δγ/q_tr − 1/(3μ + H)) (3/(2 q_tr))², 0 in an elastic step; s_A = 2μ dev ε_tr,A).
 
     A (3, 3, 3, 3) output; P (3, 3) the stress (written); Finv: F⁻¹ row-major 9-tuple; be:
-    be_tr, 6-tuple; K, mu: bulk and shear moduli, Pa; fac = 1 − 3μΔγ/q_tr; cpl, Pa⁻¹·Pa² as
+    be_tr, 6-tuple; K, mu: bulk and shear moduli, Pa; fac = 1 − 3μΔγ/q_tr; cpl, 1/Pa, as
     above."""
     x0, x1, x2, n0x, n0y, n0z, n1x, n1y, n1z, n2x, n2y, n2z = eigh3(be[0], be[1], be[2],
                                                                     be[3], be[4], be[5])
@@ -289,16 +289,6 @@ def failed_energy(J, K, mode):
         lnJ = math.log(J)
         return 0.5 * K * lnJ * lnJ
     return 0.0
-
-
-@njit(**JIT)
-def _fill(A, v):
-    """A (3, 3, 3, 3) := v."""
-    for i in range(3):
-        for j in range(3):
-            for k in range(3):
-                for l in range(3):
-                    A[i, j, k, l] = v
 
 
 # the three outcomes of a J2 point, by which the end of j2_point writes P, the history and A
@@ -461,7 +451,7 @@ def j2_point(F, h_old, prm, P, h_new, A, want_tangent):
         elif case == _FAILED:
             failed_tangent(A, cof, J, K, mode)
         else:
-            _fill(A, np.nan)
+            _fail(P, A, want_tangent)  # P (already NaN) and A := NaN
     return status
 
 
