@@ -378,17 +378,21 @@ class Run:
                     wall_time=time.perf_counter() - t0)
 
     # -- explicit ------------------------------------------------------------------------------
-    def explicit(self, fields, snap_name, field_frames, t0, on_record=None) -> dict:
+    def start_explicit(self, v0_scale: float = 1.0):
+        """Start the body for the explicit drive: the time step (``dt_factor`` times the CFL
+        estimate, or times the critical step 2/ω_max with ``dt_reference='spectrum'``), the held
+        components (N, d) uint8, the dead loads and prescribed velocities at t = 0, the contact
+        force callback (None without contact), and the body started from the initial velocity
+        (× ``v0_scale``). Returns (dt, fixed, f_ext, v_fix, extra, contact), ``contact`` the
+        contact's (rc, k, planes) or None. The driver's explicit run and the benchmarks
+        (studies.bench) start a body through this one path."""
         drive = self.model.drive
         body, ps = self.body, self.ps
         dt = body.time_step(drive.dt_factor)
-        if drive.dt_reference == "spectrum":  # dt_factor times the critical step 2/ω_max
+        if getattr(drive, "dt_reference", "cfl") == "spectrum":  # × the critical step 2/ω_max
             from .spectrum import critical_time_step
 
             dt *= critical_time_step(body, self.fixed) / body.time_step(1.0)
-        n_steps = int(math.ceil(drive.t_end / dt))
-        every = max(1, n_steps // drive.n_out)  # steps between records
-        chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
         fixed = np.ascontiguousarray(self.fixed, dtype=np.uint8)
         f_ext = self.dead_forces(0.0)
         v_fix = self.prescribed_velocity(0.0, dt) if self.prescribed else np.zeros_like(ps.X)
@@ -399,7 +403,16 @@ class Run:
 
             def extra(x):
                 return contact_forces(x, ps.body, *contact)[0]
-        body.start(self.initial_velocity(), f_ext, extra)
+        body.start(self.initial_velocity() * v0_scale, f_ext, extra)
+        return dt, fixed, f_ext, v_fix, extra, contact
+
+    def explicit(self, fields, snap_name, field_frames, t0, on_record=None) -> dict:
+        drive = self.model.drive
+        body, ps = self.body, self.ps
+        dt, fixed, f_ext, v_fix, extra, contact = self.start_explicit()
+        n_steps = int(math.ceil(drive.t_end / dt))
+        every = max(1, n_steps // drive.n_out)  # steps between records
+        chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
         dis = None
         if drive.disorder is not None:
             mask = None

@@ -162,23 +162,7 @@ def scene_body(name: str, solver: str, n_particles: int, law: str | None = None,
     body = mod.build(ps, **{**defaults, **scene_options(name, solver), **options})
     run = driver.Run(model, ps, body)
     drive = model.drive
-    dt = body.time_step(drive.dt_factor)
-    if getattr(drive, "dt_reference", "cfl") == "spectrum":
-        from sph.spectrum import critical_time_step
-
-        dt *= critical_time_step(body, run.fixed) / body.time_step(1.0)
-    f_ext = run.dead_forces(0.0)
-    v_fix = run.prescribed_velocity(0.0, dt) if run.prescribed else np.zeros_like(ps.X)
-    contact = run._contact_setup()
-    extra = None
-    if contact is not None:
-        from sph.contact import contact_forces
-
-        def extra(x):
-            return contact_forces(x, ps.body, *contact)[0]
-    v0 = run.initial_velocity() * (5.0 if law == "j2" else 1.0)
-    body.start(v0, f_ext, extra)
-    fixed = np.ascontiguousarray(run.fixed, dtype=np.uint8)
+    dt, fixed, f_ext, v_fix, extra, _ = run.start_explicit(5.0 if law == "j2" else 1.0)
     laws = sorted({r.material.law for r in model.regions})
     return SceneBody(body, dt, fixed, f_ext, v_fix, extra, float(getattr(drive, "damping", 0.0)),
                      res, law or "+".join(laws), time.perf_counter() - t0)
