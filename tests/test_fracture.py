@@ -57,6 +57,41 @@ def test_visibility_keeps_F_and_affine_exactness():
     assert np.all(d.G[~failed[rows] & failed[d.indices]] == 0.0)  # intact rows see no failed one
 
 
+def _pairs(body):
+    d = body.disc
+    rows = np.repeat(np.arange(body.disc.n), np.diff(d.indptr))
+    return rows, d.indices, np.any(d.G != 0.0, axis=1)
+
+
+def test_a_crack_stepping_sideways_leaves_no_diagonal_pair():
+    """A crack that steps sideways by one particle (column 6 up to row 2, column 5 above): the
+    intact particles either side of the step see each other only through the corner where the two
+    failed cells meet, and that corner is closed — no pair joins the two sides (a one-particle
+    ligament would carry load across the crack)."""
+    ps, body = block()
+    X = ps.X
+    col = np.where(X[:, 1] <= 2, 6, 5)
+    failed = X[:, 0] == col
+    body.cracks.update(failed, X, lambda: 0.0)
+    rows, cols, live = _pairs(body)
+    left, right = X[:, 0] < col, X[:, 0] > col
+    across = (left[rows] & right[cols]) | (right[rows] & left[cols])
+    assert not np.any(live & across)
+
+
+def test_a_crack_tip_keeps_the_pairs_around_its_corner():
+    """One failed particle: the diagonal pair whose segment only grazes its corner, beside an
+    intact particle, still interacts (a crack tip does not cut what it does not cross)."""
+    ps, body = block()
+    X = ps.X
+    failed = (X[:, 0] == 6) & (X[:, 1] == 2)
+    body.cracks.update(failed, X, lambda: 0.0)
+    rows, cols, live = _pairs(body)
+    a = np.flatnonzero((X[:, 0] == 5) & (X[:, 1] == 2))[0]
+    b = np.flatnonzero((X[:, 0] == 6) & (X[:, 1] == 3))[0]
+    assert np.any(live & (rows == a) & (cols == b)) and np.any(live & (rows == b) & (cols == a))
+
+
 @pytest.mark.parametrize("crack", ["visibility", "none"])
 def test_cracked_halves_separate_freely(crack):
     """A block with a failed column, its two halves moved apart rigidly: with the visibility
