@@ -185,6 +185,25 @@ def test_energy_balance_and_quasi_static_measures():
     assert s["kinetic_ratio"] == pytest.approx(0.008 / 0.992, rel=1e-9)
 
 
+@pytest.mark.parametrize("t_first, expected", [(0.55e-6, 0.002), (0.45e-6, 0.02)])
+def test_quasi_static_window_starts_after_the_ramp(t_first, expected):
+    """Gate 4's window starts at the end of the velocity ramp (t_ramp = 0.5 µs) when the first
+    failure comes after it: a K/E of 2 % inside the ramp (the start-up transient) is not read, the
+    0.2 % after it is; a failure within the ramp keeps the second half of the time to it."""
+    from studies.microcantilever import run_summary
+
+    scene = MicroCantilever(dim=2)
+    assert scene.t_ramp == pytest.approx(0.5e-6)
+    t = np.linspace(0.0, 1e-6, 1001)
+    W = 1e-9 * (t / t[-1]) ** 2
+    K = np.where(t < scene.t_ramp, 0.02, 0.002) * W
+    out = dict(time=t, load=1e3 * t, deflection_down=0.2 * t, failed=(t >= t_first).astype(float),
+               external_work=W, kinetic_energy=K, strain_energy=W - K, plastic_work=0 * t,
+               released_energy=0 * t, status="ok")
+    s = run_summary(out, scene)
+    assert s["kinetic_ratio"] == pytest.approx(expected / (1 - expected), rel=1e-9)
+
+
 # ------------------------------------------------------------------------------------------------
 # Gate 5: the crack band
 # ------------------------------------------------------------------------------------------------
