@@ -24,9 +24,17 @@ import scipy.sparse.linalg as spla
 from .static import Problem, TangentSolver, commit, newton
 
 
+MAX_CUTS = 6
+"""Most halvings of a step whose Newton fails (a step of Δt/2⁶ at the deepest): a material point
+that reaches failure (D ≥ 1) within a step is refused by the line search (:func:`newton`), so
+the step is cut until the point fails at a step's end, where it is committed and its element
+deleted — as the static load stepping does with its increments."""
+
+
 def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
             rtol: float = 1e-10, maxit: int = 20, snapshot=None, callback=None,
-            damping: float = 0.0, initial_tangent: bool = False):
+            damping: float = 0.0, initial_tangent: bool = False, max_cuts: int = MAX_CUTS,
+            on_step=None):
     """Advance from u = 0 (the prescribed values of the fixed DOFs at t = 0) with initial velocity
     v0 (N,) for ``n_steps`` steps of ``dt``. On the fixed DOFs v0 must be the rate of the
     prescribed motion at t = 0 (zero on a clamp): the consistent mass couples their acceleration
@@ -38,7 +46,13 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     the committed :class:`~fem_reference.static.State`.
     The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) − c M v₀ on the free DOFs
     (``damping`` c, 1/s: mass-proportional damping, module docstring). ``initial_tangent``:
-    modified Newton with the initial effective matrix (module docstring).
+    modified Newton with the initial effective matrix (module docstring). A step whose Newton
+    fails is cut in two halves, each cut again if it fails, down to Δt/2^``max_cuts``
+    (:data:`MAX_CUTS`); the run stops ("diverged") only below that. Recorded are the ends of
+    the full steps. ``on_step(t, h, r)`` (optional) is called after every converged step or
+    part of one, of length h ending at t, with r (N,) = M a + f_int − f_ext at the new state: on
+    the fixed DOFs the force of the supports on the body (dynamic equilibrium), whose impulse
+    over the step is h/2 (r_n + r_n+1) by the trapezoidal rule of the scheme.
     Returns dict(time, observed, kinetic_energy, strain_energy (stored energy of the live
     points, J: the library's closed forms), status, newton_iterations, deleted (elements, in
     order)).
@@ -69,50 +83,66 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     solver = TangentSolver()
     M_ff = M_full[disc.free][:, disc.free].tocsr()
 
-    def effective(st):
+    def effective(st, M_ff):
         """b ↦ (K₀ + (c + 2 damping/Δt) M_ff)⁻¹ b with the tangent at ``st``, factorised once."""
         K0 = problem.tangent(problem.evaluate(st.u, st, tangent=True))
         return spla.splu((K0 + (c + 2.0 * damping / dt) * M_ff).tocsc()).solve
 
-    iteration = effective(state) if initial_tangent else None
+    iteration = effective(state, M_ff) if initial_tangent else None
     if snapshot is not None:
         snapshot(0, 0.0, u, v)
     if callback is not None:
         callback(0, 0.0, state, v)
-    for n in range(n_steps):
-        tn = (n + 1) * dt
-        # a_{n+1}(u) = c (u − u_n − Δt v_n) − a_n; residual f_int(u) + M a_{n+1}(u) − f_ext
-        base = u + dt * v
+    run = dict(state=state, u=u, v=v, a=a, M_full=M_full, M_ff=M_ff, iteration=iteration)
 
-        def inertia(x, base=base, a=a, u_n=u, v_n=v):
-            f = M_full @ (c * (x - base) - a)
-            if damping:  # C v_{n+1}, v_{n+1} = 2 (x − u_n)/Δt − v_n
-                f = f + damping * (M_full @ (2.0 / dt * (x - u_n) - v_n))
+    def advance(t0, h, depth):
+        """One step of h from t0 on ``run``, cut in halves where Newton fails; None, or the
+        reason it could not be done."""
+        st, u_n, v_n, a_n = run["state"], run["u"], run["v"], run["a"]
+        ch = 4.0 / h ** 2
+        base = u_n + h * v_n
+        M_full = run["M_full"]
+
+        def inertia(x):  # a_{n+1}(x) = ch (x − u_n − h v_n) − a_n; C v_{n+1}, v = 2(x − u_n)/h − v_n
+            f = M_full @ (ch * (x - base) - a_n)
+            if damping:
+                f = f + damping * (M_full @ (2.0 / h * (x - u_n) - v_n))
             return f
 
-        u0 = u + dt * v
-        u0[disc.fixed] = problem.prescribed(tn)
-        res = newton(problem, state, u0, tn, rtol=rtol, maxit=maxit,
-                     extra_matrix=(c + 2.0 * damping / dt) * M_ff, extra_rhs=inertia,
-                     solver=solver, fixed_matrix=iteration)
+        u0 = u_n + h * v_n
+        u0[disc.fixed] = problem.prescribed(t0 + h)
+        res = newton(problem, st, u0, t0 + h, rtol=rtol, maxit=maxit,
+                     extra_matrix=(ch + 2.0 * damping / h) * run["M_ff"], extra_rhs=inertia,
+                     solver=solver, fixed_matrix=run["iteration"] if depth == 0 else None)
         if not res.converged:
-            status = f"diverged at t={tn:.4g}: {res.reason}"
-            break
+            if depth >= max_cuts:
+                return res.reason
+            return advance(t0, h / 2, depth + 1) or advance(t0 + h / 2, h / 2, depth + 1)
         iters.append(res.iterations)
-        state = commit(state, res)
-        a_new = c * (state.u - base) - a
-        v = v + dt / 2 * (a + a_new)
-        a = a_new
-        u = state.u
-        gone = problem.delete_failed(state)
+        if on_step is not None:
+            on_step(t0 + h, h, res.residual)
+        st = commit(st, res)
+        a_new = ch * (st.u - base) - a_n
+        v_new = v_n + h / 2 * (a_n + a_new)
+        gone = problem.delete_failed(st)
         if len(gone):
             deleted.extend(gone.tolist())
-            M_full = problem.mass()
-            M_ff = M_full[disc.free][:, disc.free].tocsr()
-            a[problem.held] = 0.0
-            v[problem.held] = 0.0
+            run["M_full"] = problem.mass()
+            run["M_ff"] = run["M_full"][disc.free][:, disc.free].tocsr()
+            a_new[problem.held] = 0.0
+            v_new[problem.held] = 0.0
             if initial_tangent:
-                iteration = effective(state)
+                run["iteration"] = effective(st, run["M_ff"])
+        run.update(state=st, u=st.u, v=v_new, a=a_new)
+        return None
+
+    for n in range(n_steps):
+        tn = (n + 1) * dt
+        why = advance(n * dt, dt, 0)
+        if why is not None:
+            status = f"diverged at t={tn:.4g}: {why}"
+            break
+        state, u, v, M_full = run["state"], run["u"], run["v"], run["M_full"]
         t.append(tn)
         obs.append(observe(u))
         ke.append(0.5 * v @ (M_full @ v))

@@ -290,6 +290,8 @@ class NewtonResult:
     assembly_time: float = 0.0
     solve_time: float = 0.0
     reason: str = ""
+    residual: np.ndarray | None = None  # (N,) f_int − f_ext [+ extra_rhs] at the last iterate:
+    # on the fixed DOFs, the force of the supports on the body
 
     def quadratic_constants(self, start: float = 0.2, floor: float = 1e-10) -> list[float]:
         """C_k = r_{k+1} / r_k² over the iterates in the asymptotic range (r_k < ``start``) and
@@ -383,6 +385,7 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
         r = pt["f_int"] - fext
         if extra_rhs is not None:
             r = r + extra_rhs(u)
+        res.residual = r
         rf = r[free]
         if scale is None:
             # force scale: applied load, or the reactions of a displacement-driven step; never

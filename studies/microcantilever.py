@@ -23,7 +23,9 @@ with the spacing in both methods. Gate 2 (the full 2-D run) gates the load at th
 :func:`root_region` — the tension half of the root half, where the bending stress is largest and
 no singular point lies — which converges on the FEM's ladder; csph's comes from static runs on
 the FEM's path (:func:`csph_static`; the dynamic runs fail first at the singular points)
-(:func:`root_gates`). Gate 5 (:func:`band_gates`): the energy the main crack takes
+(:func:`root_gates`). Gate 6 (the full 2-D run, shown, not gated): the same scene by the FEM with
+element deletion (:func:`fem_deletion`), its load beside csph's and its deleted elements beside
+the failed particles, with their share where the low ε_L is. Gate 5 (:func:`band_gates`): the energy the main crack takes
 (:func:`fracture_energy`) falls with the spacing under the literal ε_L and stays within 10 % across
 the ladder under the crack band (rule ``regularised``, :data:`BAND`). The other gates are the
 checks the physics and the paper's robustness claim allow without a reference (:func:`gates`).
@@ -361,6 +363,58 @@ def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MA
                 wall_time=time.perf_counter() - t0)
 
 
+# ------------------------------------------------------------------------------------------------
+# Gate 6: the FEM with element deletion, the same scene
+# ------------------------------------------------------------------------------------------------
+
+FEM_DELETION_RESOLUTION = 5
+"""Elements (9-node quadrilaterals, plane strain) across H of the FEM with element deletion (the
+full 2-D run): the scene's own drive (the patch moved at the scene's velocity) by implicit
+Newmark (:func:`fem_reference.dynamic.newmark`: a step in which Newton fails is cut), an
+element deleted once a point's damage reaches 1 (``deletion='any'``). About 2.5 minutes per
+case on one core; the crack is one element wide, H/5 = 1 µm, the grain boundary's thickness."""
+
+
+def fem_deletion(scene: MicroCantilever, case: str,
+                 resolution: int = FEM_DELETION_RESOLUTION) -> dict:
+    """The FEM of ``case`` (the scene's ε_L, the ``compression`` scene) with element deletion at
+    H/h = ``resolution``: ``time``, ``load`` (N/m, downward on the beam: the time mean over each
+    output interval of the patch's reaction, inertia included), ``deflection_down`` (m), the
+    deleted elements and their regions (:func:`deletion_summary`), ``status``, ``wall_time``."""
+    from fem_reference.model import build, solve_model
+
+    sc = scene_for(scene, case, "compression")
+    out = solve_model(sc, int(resolution), deletion=True)
+    fm = build(sc, int(resolution), deletion=True)
+    names = [r.name for r in fm.model.regions]
+    gone = np.asarray(out.get("deleted", ()), np.int64)
+    res = dict(time=np.asarray(out.get("time", ()), float),
+               load=np.asarray(out.get("load", ()), float),
+               deflection_down=np.asarray(out.get("deflection_down", ()), float),
+               status=str(out["status"]), wall_time=float(out["wall_time"]),
+               centroids=fm.disc.centroids(), region=np.asarray(fm.region), region_names=names,
+               deleted=gone)
+    res.update(deletion_summary(case, names, np.asarray(fm.region), gone))
+    return res
+
+
+def deletion_summary(case: str, names, region, deleted) -> dict:
+    """``n_deleted``, ``share_low`` (the share of the deleted elements in the material of the
+    low ε_L: the grain boundaries for ``inter``, the grains for ``intra`` — gate 3's measure
+    for the FEM) and ``regions`` ('gb01 5, gb34 2') from the region names, each element's region
+    (nel,) and the deleted element ids."""
+    deleted = np.asarray(deleted, np.int64)
+    if not deleted.size:
+        return dict(n_deleted=0, share_low=np.nan, regions="")
+    reg = np.asarray(region)[deleted]
+    gb = np.array([names[r].startswith("gb") for r in reg], bool)
+    share = gb.mean() if case == "inter" else 1.0 - gb.mean()
+    counts = dict(zip(*np.unique(reg, return_counts=True)))
+    return dict(n_deleted=int(deleted.size), share_low=float(share),
+                regions=", ".join(f"{names[r]} {int(c)}" for r, c in sorted(
+                    counts.items(), key=lambda rc: names[rc[0]])))
+
+
 def region_limits(scene: MicroCantilever, spacing: float, model) -> np.ndarray:
     """ε_L of each region of ``model`` (its order) for the scene's case at ``spacing``."""
     grains, gb = scene.limits(spacing)
@@ -501,7 +555,9 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
                      FEM_MAX if quick else FEM_MAX_ROOT) if scene.dim == 2 else None
     # gate 2's csph: the static runs on the FEM's path (the full 2-D run)
     static = {r: csph_static(scene, r) for r in res} if scene.dim == 2 and not quick else None
-    ds = dataset(scene, outs, rules, res, fem, static)
+    # gate 6: the FEM with element deletion beside the particles (the full 2-D run)
+    deletion = {c: fem_deletion(scene, c) for c in CASES} if scene.dim == 2 and not quick else None
+    ds = dataset(scene, outs, rules, res, fem, static, deletion)
     if fields is not None:
         from pathlib import Path
 
@@ -660,7 +716,7 @@ def run_summary(out: dict, scene: MicroCantilever, resolution: int | None = None
 
 
 def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
-            static: dict | None = None) -> xr.Dataset:
+            static: dict | None = None, deletion: dict | None = None) -> xr.Dataset:
     """The study's dataset from the runs ``outs`` {(case, rule, resolution): driver output} and
     the FEM reference ``fem`` (:func:`fem_ladder`, or None)."""
     time = np.linspace(0.0, scene.t_end, N_TIME)
@@ -723,6 +779,8 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
         _fem_variables(ds, fem, outs, rules, res)
         if static:
             _root_variables(ds, fem, static, res)
+    if deletion:
+        _deletion_variables(ds, deletion)
     _final_particles(ds, finest, rules)
     ds.attrs.update(results.provenance(NAME, scene))
     ds.attrs["plane"] = "strain" if scene.dim == 2 else "none (3-D)"
@@ -730,6 +788,44 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
                                   if k in rules)
     ds.attrs["seeds_um"] = str(np.round(scene.seeds() * 1e6, 3).tolist())
     return ds
+
+
+def _deletion_variables(ds: xr.Dataset, deletion: dict) -> None:
+    """Gate 6's variables: the load history of the FEM with element deletion on the dataset's
+    time axis, and per case its status, deleted elements and their regions, and the reference
+    centroids of the elements (``fem_element_X``, for the figure)."""
+    time = ds.time.values
+    load = np.full((len(CASES), len(time)), np.nan)
+    defl = np.full((len(CASES), len(time)), np.nan)
+    for i, c in enumerate(CASES):
+        d = deletion[c]
+        if len(d["time"]) > 1 and np.isfinite(d["load"]).any():
+            ok = np.isfinite(d["load"])
+            load[i] = np.interp(time, d["time"][ok], d["load"][ok], left=np.nan, right=np.nan)
+            defl[i] = np.interp(time, d["time"], d["deflection_down"], right=np.nan)
+    ds["fem_deletion_load"] = (("case", "time"), load, {
+        "units": "N/m", "long_name": "FEM with element deletion: force of the loading patch on "
+                                     "the beam, downward (time mean per output interval)"})
+    ds["fem_deletion_deflection"] = (("case", "time"), defl, {
+        "units": "m", "long_name": "FEM with element deletion: downward displacement of the patch"})
+    ds["fem_deletion_status"] = (("case",), np.array([deletion[c]["status"] for c in CASES]),
+                                 {"units": "-"})
+    ds["fem_deletion_wall_time"] = (("case",), np.array([deletion[c]["wall_time"] for c in CASES]),
+                                    {"units": "s"})
+    ds["fem_deleted"] = (("case",), np.array([deletion[c]["n_deleted"] for c in CASES]),
+                         {"units": "-", "long_name": "elements deleted"})
+    ds["fem_deleted_share_low"] = (("case",), np.array([deletion[c]["share_low"] for c in CASES]), {
+        "units": "-", "long_name": "share of the deleted elements where the low eps_L is"})
+    ds["fem_deleted_regions"] = (("case",), np.array([deletion[c]["regions"] for c in CASES]),
+                                 {"units": "-", "long_name": "deleted elements per region"})
+    first = deletion[CASES[0]]
+    ds["fem_element_X"] = (("fem_element", "dim"), np.asarray(first["centroids"]), {"units": "m"})
+    ds["fem_element_region"] = (("fem_element",), first["region"], {
+        "units": "-", "long_name": "region index into the attribute region_names"})
+    dead = np.zeros((len(CASES), len(first["region"])), np.int8)
+    for i, c in enumerate(CASES):
+        dead[i, deletion[c]["deleted"]] = 1
+    ds["fem_element_deleted"] = (("case", "fem_element"), dead, {"units": "-"})
 
 
 def _root_variables(ds: xr.Dataset, fem: dict, static: dict, res) -> None:
@@ -1059,6 +1155,21 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                              + "; ".join(parts) + f". compression: eps_L as given "
                              f"(band {float(ds.attrs.get('param_band', 0.0)):g} m); regularised: "
                              f"crack band {float(ds.attrs.get('param_band', 0.0)) or BAND:g} m.")
+    if "fem_deletion_status" in ds:
+        for case in ds.case.values:
+            L = ds.fem_deletion_load.sel(case=case).values
+            peak = np.nanmax(L) if np.isfinite(L).any() else np.nan
+            tail = L[(ds.time.values > (1 - TAIL) * ds.time.values[-1]) & np.isfinite(L)]
+            notes.append(
+                f"gate 6, {case}: the FEM with element deletion (Q9, H/h = "
+                f"{FEM_DELETION_RESOLUTION}, Newmark, plane strain) — "
+                f"{ds.fem_deletion_status.sel(case=case).values}, "
+                f"{int(ds.fem_deleted.sel(case=case))} elements deleted "
+                f"({ds.fem_deleted_regions.sel(case=case).values}; "
+                f"{100 * float(ds.fem_deleted_share_low.sel(case=case)):.0f} % where the low eps_L "
+                f"is), peak load {peak:.4g} N/m, mean load over the last 20 % "
+                f"{(f'{100 * tail.mean() / peak:.2g} %' if tail.size else 'n/a')} of it, "
+                f"{float(ds.fem_deletion_wall_time.sel(case=case)):.0f} s.")
     for case, rule, r, sel in _runs(ds, tuple(ds.rule.values)):
         v = {k: ds[k].sel(**sel).values for k in ("peak_load", "t_first_failure", "n_failed",
                                                    "share_boundaries", "tail_load_ratio", "separated",
@@ -1106,6 +1217,10 @@ def plot(ds: xr.Dataset, outdir) -> list:
                         ds.fem_load.sel(fem_resolution=r).values[keep], "k", lw=0.8,
                         alpha=0.4 + 0.6 * float(r) / float(ds.fem_resolution.values[-1]),
                         label=f"FEM, H/h = {int(r)}, to its first failure")
+        if "fem_deletion_load" in ds:
+            ax.plot(ds.fem_deletion_deflection.sel(case=case) * 1e6,
+                    ds.fem_deletion_load.sel(case=case), "k--", lw=1.2,
+                    label=f"FEM with element deletion, H/h = {FEM_DELETION_RESOLUTION}")
         ax.set_xlabel("deflection of the loading patch [um]")
         ax.set_ylabel("load [N/m]" if ds.attrs.get("plane") == "strain" else "load [N]")
         ax.set_title(f"{case}-granular")
@@ -1186,7 +1301,9 @@ def cracked(ds: xr.Dataset, path):
 
     names = ds.attrs["region_names"].split(", ")
     rules = list(ds.rule.values)
-    fig, axes = plt.subplots(len(rules), len(ds.case), figsize=(6 * len(ds.case), 2.6 * len(rules)),
+    fem = "fem_element_deleted" in ds
+    rows = len(rules) + int(fem)
+    fig, axes = plt.subplots(rows, len(ds.case), figsize=(6 * len(ds.case), 2.6 * rows),
                              squeeze=False)
     palette = np.array(["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown",
                         "tab:pink", "tab:olive", "tab:cyan"])
@@ -1218,4 +1335,28 @@ def cracked(ds: xr.Dataset, path):
             ax.set_title(f"{case}-granular, {rule}, H/dx = "
                          f"{int(ds.particle_resolution.sel(case=case, rule=rule))}", fontsize=9)
             ax.set_xlabel("x [um]")
+            ax.set_ylabel(("y" if up == 1 else "z") + " [um]")
+        if fem:  # the FEM with element deletion: element centres, reference configuration
+            ax = axes[-1, i]
+            Xe = ds.fem_element_X.values
+            reg = ds.fem_element_region.values
+            dead = ds.fem_element_deleted.sel(case=case).values.astype(bool)
+            col = np.array(["tab:gray" if names[r].startswith("gb") else
+                            palette[int(names[r][5:]) % len(palette)] for r in reg])
+            ax.scatter(Xe[~dead, 0] * 1e6, Xe[~dead, 1] * 1e6, c=col[~dead], s=14, marker="s")
+            ax.scatter(Xe[dead, 0] * 1e6, Xe[dead, 1] * 1e6, c="red", s=14, marker="s")
+            ax.set_aspect("equal")
+            ax.set_title(f"{case}-granular, FEM with element deletion, H/h = "
+                         f"{FEM_DELETION_RESOLUTION} (element centres, reference)", fontsize=9)
+            ax.set_xlabel("x [um]")
+            ax.set_ylabel("y [um]")
+    from matplotlib.lines import Line2D
+
+    grains = sorted({int(n[5:]) for n in names if n.startswith("grain")})
+    key = [Line2D([], [], ls="", marker="o", color=palette[g % len(palette)], label=f"grain {g}")
+           for g in grains]
+    key += [Line2D([], [], ls="", marker="o", color="tab:gray", label="grain boundary"),
+            Line2D([], [], ls="", marker="o", color="red", label="failed / deleted (D >= 1)")]
+    axes[-1, 0].legend(handles=key, loc="upper left", bbox_to_anchor=(0.0, -0.3), ncol=4,
+                       fontsize=8, frameon=False)
     return save(fig, path)

@@ -189,3 +189,60 @@ def test_newmark_deletes_a_failed_element():
     assert run["deleted"].tolist() == [1]
     # the weak element (ρ 3×) had 3/6 of the mass: half is left
     assert problem.mass().sum() / 3 == pytest.approx(0.5 * mass0, rel=1e-12)
+
+
+def _bar_from_rest(v=5.0, n=8):
+    """The J2 bar of the tests above, at rest, its end X = L pulled at v from t = 0: a plastic
+    wave, no homogeneous solution to start Newton from."""
+    Lb, Wb = 4e-3, 1e-3
+    disc = Discretisation(box((0, 0, 0), (Lb, Wb, Wb), (n, 1, 1)))
+    bc = Constraints(disc)
+    bc.roller(lambda x: x[0] < 1e-12, 0)
+    bc.prescribe(lambda x: x[0] > Lb - 1e-12, 0, lambda t: v * t)
+    bc.roller(lambda x: (x[1] < 1e-12) | (x[1] > Wb - 1e-12), 1)
+    bc.roller(lambda x: (x[2] < 1e-12) | (x[2] > Wb - 1e-12), 2)
+    bc.apply()
+    return Problem(disc, TABLE1_STEEL, None, bc.values, lambda t: np.zeros(disc.N))
+
+
+def test_newmark_cuts_a_step_newton_cannot_take():
+    """With three Newton iterations allowed, the first step of 1 µs does not converge: without
+    step cutting the run stops there; with it the run goes on in halved steps, and its axial
+    displacements are as close to a run at a quarter of the step as the uncut run at the full
+    step with enough iterations (the halves are finer steps of the same scheme)."""
+    problem = _bar_from_rest()
+    v0 = np.zeros(problem.disc.N)
+    ux = lambda u: u[::3].copy()  # noqa: E731
+    stuck = newmark(problem, v0, 1e-6, 20, observe=ux, maxit=3, max_cuts=0)
+    assert stuck["status"].startswith("diverged at t=1e-06")
+    cut = newmark(problem, v0, 1e-6, 20, observe=ux, maxit=3)
+    assert cut["status"] == "ok" and len(cut["time"]) == 21
+    assert len(cut["newton_iterations"]) > 20  # some steps were cut
+    full = newmark(problem, v0, 1e-6, 20, observe=ux)
+    fine = newmark(problem, v0, 0.25e-6, 80, observe=ux)
+    ref = fine["observed"][::4]
+    assert np.abs(cut["observed"] - ref).max() <= np.abs(full["observed"] - ref).max()
+
+
+def test_newmark_reaction_impulse_is_the_momentum_change():
+    """on_step's r on the fixed DOFs is the supports' force M a + f_int − f_ext: summed over the
+    axial fixed DOFs (both ends) and integrated by the trapezoidal rule it equals the change of
+    the bar's axial momentum 1ᵀ M v (Σ f_int = 0 for any displacement: the shape functions sum
+    to one; no external force), to the Newton tolerance (1e-10 of the force scale: 1e-8 here)."""
+    problem = _bar_from_rest()
+    disc = problem.disc
+    axial = np.arange(disc.N) % 3 == 0
+    fixed_x = np.intersect1d(disc.fixed, np.flatnonzero(axial))
+    impulse, prev, last_v = [0.0], [0.0], [None]  # at rest at t = 0: r₀ = 0
+
+    def on_step(t, h, r):
+        now = r[fixed_x].sum()
+        impulse[0] += 0.5 * h * (prev[0] + now)
+        prev[0] = now
+
+    run = newmark(problem, np.zeros(disc.N), 1e-6, 20, observe=lambda u: 0.0, on_step=on_step,
+                  callback=lambda s, t, st, v: last_v.__setitem__(0, v.copy()))
+    assert run["status"] == "ok"
+    momentum = float((problem.mass() @ last_v[0])[axial].sum())
+    assert abs(momentum) > 0
+    assert impulse[0] == pytest.approx(momentum, rel=1e-8)

@@ -302,3 +302,17 @@ def test_band_gate():
     assert len(bad) == 2 and not any(g.passed for g in bad)
     r, G = fracture_ladder(ds_with([6e-6] * 3), "inter", "compression")
     assert spacing_power(r, G) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_deletion_summary_counts_the_deleted_elements_by_region():
+    """Gate 6's measure for the FEM with element deletion: the deleted elements per region and
+    their share where the case's low ε_L is (the boundaries for inter, the grains for intra)."""
+    from studies.microcantilever import deletion_summary
+
+    names = ["grain0", "grain1", "gb01"]
+    region = np.array([0, 0, 2, 2, 1, 1, 2])
+    s = deletion_summary("inter", names, region, [2, 3, 6, 0])
+    assert s == dict(n_deleted=4, share_low=0.75, regions="gb01 3, grain0 1")
+    s = deletion_summary("intra", names, region, [2, 3, 6, 0])
+    assert s["share_low"] == 0.25
+    assert deletion_summary("intra", names, region, [])["n_deleted"] == 0
