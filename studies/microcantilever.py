@@ -398,21 +398,26 @@ def fem_deletion(scene: MicroCantilever, case: str,
     return res
 
 
+def by_region(names, regions) -> tuple[float, str]:
+    """(share in the grain boundaries, 'gb01 5, grain0 2'): of a set of particles or elements whose
+    region ids (into ``names``) are ``regions``; NaN and '' for an empty set."""
+    regions = np.asarray(regions, np.int64)
+    if not regions.size:
+        return float("nan"), ""
+    gb = np.array([names[r].startswith("gb") for r in regions], bool)
+    counts = {names[r]: int(c) for r, c in zip(*np.unique(regions, return_counts=True))}
+    return float(gb.mean()), ", ".join(f"{n} {c}" for n, c in sorted(counts.items()))
+
+
 def deletion_summary(case: str, names, region, deleted) -> dict:
     """``n_deleted``, ``share_low`` (the share of the deleted elements in the material of the
     low ε_L: the grain boundaries for ``inter``, the grains for ``intra`` — gate 3's measure
     for the FEM) and ``regions`` ('gb01 5, gb34 2') from the region names, each element's region
     (nel,) and the deleted element ids."""
     deleted = np.asarray(deleted, np.int64)
-    if not deleted.size:
-        return dict(n_deleted=0, share_low=np.nan, regions="")
-    reg = np.asarray(region)[deleted]
-    gb = np.array([names[r].startswith("gb") for r in reg], bool)
-    share = gb.mean() if case == "inter" else 1.0 - gb.mean()
-    counts = dict(zip(*np.unique(reg, return_counts=True)))
-    return dict(n_deleted=int(deleted.size), share_low=float(share),
-                regions=", ".join(f"{names[r]} {int(c)}" for r, c in sorted(
-                    counts.items(), key=lambda rc: names[rc[0]])))
+    gb, regions = by_region(names, np.asarray(region)[deleted])
+    return dict(n_deleted=int(deleted.size), share_low=gb if case == "inter" else 1.0 - gb,
+                regions=regions)
 
 
 def region_limits(scene: MicroCantilever, spacing: float, model) -> np.ndarray:
@@ -687,13 +692,9 @@ def run_summary(out: dict, scene: MicroCantilever, resolution: int | None = None
             s["elastic_slope"] = float(np.polyfit(d[lin], F[lin], 1)[0])
     mask = np.asarray(out.get("failed_particles", ()), bool)
     if mask.size:
-        names = list(out["region_names"])
-        reg = np.asarray(out["region"])[mask]
-        gb = np.array([names[r].startswith("gb") for r in reg], bool)
         s["n_failed"] = int(mask.sum())
-        s["share_boundaries"] = float(gb.mean()) if mask.any() else nan
-        counts = {names[r]: int(c) for r, c in zip(*np.unique(reg, return_counts=True))}
-        s["crack_regions"] = ", ".join(f"{n} {c}" for n, c in sorted(counts.items()))
+        s["share_boundaries"], s["crack_regions"] = by_region(list(out["region_names"]),
+                                                            np.asarray(out["region"])[mask])
     # each recorded load is the mean over the interval since the record before: their time mean
     # over the tail is Σ F_k Δt_k / Σ Δt_k
     tail = np.flatnonzero(t[1:] > t[-1] - TAIL * scene.t_end) + 1
