@@ -56,8 +56,11 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland
                         "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
                re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)",
                crack="'visibility' (default: an intact particle stops seeing failed particles and "
-                     "what lies behind them, sph.crack) | 'none' (the pairs never change)")
+                     "what lies behind them, sph.crack) | 'none' (the pairs never change)",
+               mirror="'auto' (default: the scene's symmetry planes by mirror images, sph.mirror) "
+                      "| 'none' (a one-sided stencil at a symmetry plane)")
 CRACKS = ("visibility", "none")
+MIRRORS = ("auto", "none")
 INTEGRATIONS = ("auto", "consistent", "nodal")
 GRADIENTS = ("kernel", "wls")
 
@@ -173,8 +176,10 @@ class CSPH(ParticleBody):
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
                  correction: str = DEFAULT_CORRECTION, integration: str = "auto",
                  hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None,
-                 crack: str = "visibility"):
+                 crack: str = "visibility", mirror: str = "auto"):
         super().__init__(particles)
+        if mirror not in MIRRORS:
+            raise ValueError(f"mirror: {mirror!r} is not one of {', '.join(map(repr, MIRRORS))}")
         if crack not in CRACKS:
             raise ValueError(f"crack: {crack!r} is not one of {', '.join(map(repr, CRACKS))}")
         if gradient not in GRADIENTS:
@@ -189,6 +194,13 @@ class CSPH(ParticleBody):
             integration = ("consistent" if ps.lattice == "node" and ps.origin is not None
                            and ps.domain_shape is not None else "nodal")
         self.integration = integration
+        images = None
+        if mirror == "auto" and ps.mirrors:  # the full body, restricted below (sph.mirror)
+            from .mirror import full_particles
+
+            images = full_particles(ps, ps.mirrors, 1e-6 * ps.dx)
+            ps = images.full
+        self.mirrors = () if images is None else particles.mirrors  # the planes mirrored
         body = ps.body if len(ps.body_names) > 1 else None
         if integration == "consistent":
             disc, self.consistency = consistent(ps, h_ratio, kernel, correction,
@@ -198,16 +210,27 @@ class CSPH(ParticleBody):
             disc = wls(ps, re_ratio, body)
         else:
             disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=body)
+        if images is not None:
+            from .mirror import restrict
+
+            disc = restrict(disc, images, particles.m)
+            if self.normals is not None:  # the real particles' shares of the full body's
+                self.normals = images.w[:, None] * self.normals[:particles.n]
+            ps = particles
         self.disc = disc
         self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
         self.m = disc.m
         self._h_scratch = self.tl.history.copy()
-        self._V_work = disc.V.copy()  # the volumes of the plastic and released work
+        self._V_work = disc.V_energy.copy()  # the volumes of the plastic and released work
         self.cracks = None
         mats = ps.table.materials
         breakable = np.array([m.law == "j2" and np.isfinite(m.eps_L) for m in mats], bool)
         if crack == "visibility" and breakable.any():
             from .crack import Cracks
+
+            if disc.n_ghost:
+                raise ValueError("crack: 'visibility' is not modelled with symmetry planes (mirror "
+                                 "images); allowed there: crack='none' or mirror='none'")
 
             literal = np.array([m.law == "j2" and m.failure == "literal" for m in mats], bool)
             self.cracks = Cracks(self.tl, ps.dx, literal[ps.mat_id])
@@ -248,14 +271,14 @@ class CSPH(ParticleBody):
         from .diagnostics import strain_energy
 
         b = self.tl
-        F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
+        F = b.deformation_gradients(self.x)
+        V = self.disc.V_energy  # particles without volume (sph.crack) carry no energy, whatever F
         if b.history.shape[1] > 0:
             from workbench.materials.kernels import stored_energies
 
-            V = self.disc.V  # particles without volume (sph.crack) carry no energy, whatever F
             e = float(V[V > 0] @ stored_energies(F, b.history, b.prm, b.mat_id)[V > 0])
         else:
-            e = strain_energy(F, self.disc.V, b.prm, b.mat_id, history=b.history)
+            e = strain_energy(F, V, b.prm, b.mat_id, history=b.history)
         if b.K_hg is not None:
             e += 0.5 * float(np.sum(self.x * (b.K_hg @ self.x)))
         return e
@@ -288,7 +311,8 @@ class CSPH(ParticleBody):
         if self.cracks is not None:
             tension &= ~self.cracks.failed & ~self.cracks.detached
         on = tension[rows] & np.any(d.G != 0.0, axis=1)
-        g = coo_matrix((np.ones(on.sum()), (rows[on], d.indices[on])), shape=(d.n, d.n))
+        cols = d.indices if not d.n_ghost else np.concatenate([np.arange(d.n), d.ghost_src])[d.indices]
+        g = coo_matrix((np.ones(on.sum()), (rows[on], cols[on])), shape=(d.n, d.n))
         return connected_components(g, directed=False)[1]
 
     def gradient_form(self):
@@ -299,12 +323,14 @@ class CSPH(ParticleBody):
         (:func:`sph.hourglass.hourglass_strain`)."""
         from .hourglass import hourglass_operator, hourglass_strain
 
+        if self.disc.n_ghost:
+            return {}
         if not hasattr(self, "_hg_op"):
             self._hg_op = hourglass_operator(self.disc)
         return dict(hourglass_strain=hourglass_strain(self.disc, self.x, *self._hg_op))
 
     def field_state(self) -> dict:
-        F = tl.deformation_gradients(self.x, self.disc.indptr, self.disc.indices, self.disc.G)
+        F = self.tl.deformation_gradients(self.x)
         # V: the volumes of the stored energy and the work (dissipated), m³ (m² in 2-D)
         return dict(t=self.t, x=self.x, v=self.v, F=F, history=self.tl.history,
                     mat_id=self.tl.mat_id, region=self.particles.region, V=self._V_work)

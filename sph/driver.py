@@ -615,19 +615,16 @@ class Run:
                 self.mirror_planes())
 
     def mirror_planes(self):
-        """The contact's plane bit masks (:func:`sph.contact.mirror_planes`): a
-        :class:`~workbench.scenes.model.Roller` on a set whose shape is a
-        :class:`~workbench.scenes.shapes.Plane` with the roller's axis as its normal is a mirror
-        plane (a symmetry plane; a frictionless wall is one too); a contact pair of particles both
-        of its set and on the plane carries half its force. None without such planes."""
-        from workbench.scenes.shapes import Plane
-
+        """The contact's plane bit masks (:func:`sph.contact.mirror_planes`) on the symmetry planes
+        (:func:`sph.mirror.symmetry_planes`: a :class:`~workbench.scenes.model.Roller` on a
+        :class:`~workbench.scenes.shapes.Plane` set with the roller's axis as its normal, the body
+        on one side; a frictionless wall is one too): a contact pair of particles both of its set
+        and on the plane carries half its force. None without such planes."""
         from .contact import mirror_planes
+        from .mirror import symmetry_planes
 
-        shapes = {s.name: s.shape for s in self.model.sets}
-        planes = [(c.axis, shapes[c.set].at, self.ps.sets[c.set]) for c in self.model.constraints
-                  if isinstance(c, M.Roller) and isinstance(shapes.get(c.set), Plane)
-                  and shapes[c.set].axis == c.axis]
+        planes = [(a, at, self.ps.sets[name])
+                  for a, at, name in symmetry_planes(self.model, self.ps, TOL * self.ps.dx)]
         if not planes:
             return None
         return mirror_planes(self.ps.X, planes, TOL * self.ps.dx)  # the sets' own tolerance

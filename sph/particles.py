@@ -61,7 +61,8 @@ class Particles:
     prescribed motion); clamped (N,) the particles held in every DOF at rest (held regions and
     clamps); domain (N,) the particles in the closed union of the non-held regions (the body's
     integration domain: a clamp is a face of it), ``domain_shape`` that union and ``origin`` the
-    lattice's first point (None off the lattice)."""
+    lattice's first point (None off the lattice); mirrors the symmetry planes ((axis, at, set
+    name), ...; :func:`sph.mirror.symmetry_planes`; node lattice only)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -84,6 +85,7 @@ class Particles:
     domain: np.ndarray | None = None
     domain_shape: object = None
     origin: np.ndarray | None = None
+    mirrors: tuple = ()
 
     @property
     def n(self) -> int:
@@ -317,6 +319,10 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
             ps.set_normal_axis[s.name] = s.shape.axis
     del n_lat
     _constraints(model, ps, lat, tol, lo)
+    if mode == "node" and not conc:
+        from .mirror import symmetry_planes
+
+        ps.mirrors = symmetry_planes(model, ps, tol)
     return ps
 
 

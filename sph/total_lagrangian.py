@@ -56,7 +56,10 @@ class Discretisation:
     X (N, d) m; V (N,) integration volumes, m^d; m (N,) kg; h m (kernel scale, for information);
     kernel name; indptr/indices CSR neighbours; G, GT (nnz, d) the gradients G_ab and G_ba, 1/m;
     L (N, d, d) the correction matrices where they exist (eq. 31); ok (N,) the gradient regular;
-    correction: the gradient correction used ('linear', 'quadratic', 'wls' …)."""
+    correction: the gradient correction used ('linear', 'quadratic', 'wls' …). With symmetry
+    planes (:mod:`sph.mirror`) ``indices`` also point at ghosts (≥ N): the mirror images of the
+    particles ghost_src (n_g,), at ghost_sign ⊙ x_src + ghost_offset (n_g, d); V is then the full
+    body's volume and w (N,) each particle's share of it."""
 
     X: np.ndarray
     V: np.ndarray
@@ -70,6 +73,34 @@ class Discretisation:
     L: np.ndarray
     ok: np.ndarray
     correction: str = ""
+    ghost_src: np.ndarray | None = None
+    ghost_sign: np.ndarray | None = None
+    ghost_offset: np.ndarray | None = None
+    w: np.ndarray | None = None
+
+    @property
+    def n_ghost(self) -> int:
+        """Mirror images among the neighbours (:mod:`sph.mirror`): indices ≥ n are ghosts."""
+        return 0 if self.ghost_src is None else self.ghost_src.shape[0]
+
+    @property
+    def V_energy(self) -> np.ndarray:
+        """The volumes of the stored energy, work and reactions of these particles: V times the
+        share w of a particle on symmetry planes (:mod:`sph.mirror`); V without them."""
+        return self.V if self.w is None else self.V * self.w
+
+    def extend(self, x) -> np.ndarray:
+        """Positions of the particles and their ghosts, (n + n_ghost, d); x itself without
+        ghosts."""
+        if self.ghost_src is None:
+            return x
+        return np.concatenate([x, self.ghost_sign * x[self.ghost_src] + self.ghost_offset])
+
+    def mirror_VP(self, VP) -> None:
+        """The ghosts' rows of VP (n + n_ghost, d, d), in place: R (V P)_src R, R = diag(sign)."""
+        if self.ghost_src is not None:
+            s = self.ghost_sign
+            VP[self.n:] = s[:, :, None] * VP[self.ghost_src] * s[:, None, :]
 
     @property
     def n(self) -> int:
@@ -107,8 +138,8 @@ def _deformation_gradient_row(a, x, indptr, indices, G, F):
 
 @njit(parallel=True, **JIT)
 def deformation_gradients(x, indptr, indices, G):
-    """Eq. 35 for every particle, (N, 3, 3)."""
-    N = x.shape[0]
+    """Eq. 35 for every particle (the rows of ``indptr``; x may also hold ghosts), (N, 3, 3)."""
+    N = indptr.shape[0] - 1
     F = np.empty((N, 3, 3))
     for a in prange(N):
         _deformation_gradient_row(a, x, indptr, indices, G, F[a])
@@ -172,12 +203,13 @@ def _inactive_row(a, h_old, h_new, VP, status):
 @njit(parallel=True, **JIT)
 def stress_pass(x, indptr, indices, G, V, h_old, prm, mat_id, want_tangent, VP, h_new, F_all,
                 A_all, status):
-    """:func:`_stress_row` over all particles, in chunks that allocate their scratch once.
+    """:func:`_stress_row` over all particles (the rows of ``indptr``; x may also hold ghosts), in
+    chunks that allocate their scratch once.
 
     prm (n_mat, N_PARAMS) the material table, mat_id (N,) its rows; VP (N, d, d) out: V_a P_a;
     h_new (N, nh) out; F_all (N, 3, 3) or (0, 3, 3): F out if non-empty; A_all (N, d, d, d, d)
     or empty: dP/dF out when ``want_tangent``; status (N,) int64 out."""
-    N = x.shape[0]
+    N = indptr.shape[0] - 1
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
     for c in prange(N_CHUNKS):
         F = np.empty((3, 3))
@@ -205,8 +237,9 @@ def _force_row(a, VP, indptr, indices, G, GT, f):
 
 @njit(parallel=True, **JIT)
 def internal_force(VP, indptr, indices, G, GT):
-    """f_a = −Σ_b (V_b P_b G_ba − V_a P_a G_ab) for every particle, (N, d), N (N/m in 2-D)."""
-    N, d = VP.shape[0], VP.shape[1]
+    """f_a = −Σ_b (V_b P_b G_ba − V_a P_a G_ab) for every particle (the rows of ``indptr``; VP may
+    also hold ghosts), (N, d), N (N/m in 2-D)."""
+    N, d = indptr.shape[0] - 1, VP.shape[1]
     f = np.empty((N, d))
     for a in prange(N):
         _force_row(a, VP, indptr, indices, G, GT, f)
@@ -239,7 +272,10 @@ class Body:
         self.history = (self.table.initial_history(self.mat_id) if history is None
                         else np.ascontiguousarray(history, dtype=np.float64))
         self.history_trial = self.history.copy()
-        self.VP = np.zeros((N, d, d))
+        if disc.n_ghost and self.hourglass > 0:
+            raise ValueError("hourglass: not modelled with symmetry planes (mirror images); "
+                             "allowed there: 0")
+        self.VP = np.zeros((N + disc.n_ghost, d, d))
         self.F = np.zeros((N, 3, 3))
         self.status = np.zeros(N, np.int64)
         self._noA = np.zeros((0, d, d, d, d))
@@ -255,9 +291,12 @@ class Body:
         (N, d, d, d, d) block of dP/dF."""
         dsc = self.disc
         A = np.zeros((dsc.n,) + (dsc.dim,) * 4) if tangent else self._noA
-        stress_pass(x, dsc.indptr, dsc.indices, dsc.G, dsc.V, self.history, self.prm, self.mat_id,
-                    tangent, self.VP, self.history_trial, self.F, A, self.status)
+        stress_pass(dsc.extend(x), dsc.indptr, dsc.indices, dsc.G, dsc.V, self.history, self.prm,
+                    self.mat_id, tangent, self.VP, self.history_trial, self.F, A, self.status)
+        dsc.mirror_VP(self.VP)
         f = internal_force(self.VP, dsc.indptr, dsc.indices, dsc.G, dsc.GT)
+        if dsc.w is not None:  # the full body's force times the share (sph.mirror)
+            f *= dsc.w[:, None]
         if self.K_hg is not None:
             f -= self.K_hg @ x
         return (f, A) if tangent else f
@@ -268,6 +307,11 @@ class Body:
         if self.K_hg is not None:
             K = (K + sp.kron(self.K_hg, sp.identity(self.disc.dim), format="csr")).tocsr()
         return K
+
+    def deformation_gradients(self, x):
+        """Eq. 35 at positions x (N, d) — the ghosts of symmetry planes included — (N, 3, 3)."""
+        d = self.disc
+        return deformation_gradients(np.ascontiguousarray(d.extend(x)), d.indptr, d.indices, d.G)
 
     def commit(self):
         """Accept the last evaluation's history (end of a converged load step or time step)."""
@@ -289,20 +333,36 @@ class Body:
 # ================================================================================================
 
 @njit(**JIT)
-def _tangent_pattern(indptr, indices):
-    """The block sparsity of K: particle e is in row c when some stencil {a} ∪ nbrs(a) holds both
-    (neighbour lists are symmetric, so the owners a of c are c and its neighbours). Returns the
-    block CSR (bptr (N+1,), bcol (nnzb,)), each row sorted."""
+def _tangent_pattern(indptr, indices, src):
+    """The block sparsity of K: particle e is in row c when some stencil {a} ∪ nbrs(a) holds both,
+    a stencil member m standing for particle src[m] (a ghost for its source, :mod:`sph.mirror`;
+    src[m] = m for the particles). Returns the block CSR (bptr (N+1,), bcol (nnzb,)), each row
+    sorted."""
     N = indptr.shape[0] - 1
+    cnt = np.zeros(N + 1, np.int64)  # the owners a of each c: c ∈ src(stencil(a))
+    for a in range(N):
+        cnt[a + 1] += 1
+        for p in range(indptr[a], indptr[a + 1]):
+            cnt[src[indices[p]] + 1] += 1
+    optr = np.cumsum(cnt)
+    own = np.empty(optr[N], np.int64)
+    fill = optr[:N].copy()
+    for a in range(N):
+        own[fill[a]] = a
+        fill[a] += 1
+        for p in range(indptr[a], indptr[a + 1]):
+            c = src[indices[p]]
+            own[fill[c]] = a
+            fill[c] += 1
     mark = np.full(N, -1, np.int64)
     counts = np.zeros(N + 1, np.int64)
     rows = []
     for c in range(N):
         cols = []
-        for q in range(indptr[c], indptr[c + 1] + 1):
-            a = c if q == indptr[c + 1] else indices[q]
+        for q in range(optr[c], optr[c + 1]):
+            a = own[q]
             for r in range(indptr[a], indptr[a + 1] + 1):
-                e = a if r == indptr[a + 1] else indices[r]
+                e = a if r == indptr[a + 1] else src[indices[r]]
                 if mark[e] != c:
                     mark[e] = c
                     cols.append(e)
@@ -318,30 +378,37 @@ def _tangent_pattern(indptr, indices):
 
 
 @njit(**JIT)
-def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, vals):
+def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, src, sign, vals):
     """K_(c k),(e l) += V_a Σ_jm g_ac,j A_a[k,j,l,m] g_ae,m for every stencil a ∪ nbrs(a), with
     g_ab = G_ab, g_aa = −Σ_b G_ab (∂F_a/∂x_c = I ⊗ g_ac), written straight into the CSR values of
-    the block pattern (row (c, k): the blocks e of row c, each d wide). Serial: stencils overlap."""
+    the block pattern (row (c, k): the blocks e of row c, each d wide). A stencil member m is
+    particle src[m] with the factor sign[m, k] on its DOF k (a ghost, :mod:`sph.mirror`: the fold
+    Tᵀ K T; src[m] = m and sign 1 for the particles). Serial: stencils overlap."""
     N = indptr.shape[0] - 1
     for i in range(vals.shape[0]):
         vals[i] = 0.0
     g = np.empty((64, d))
     ids = np.empty(64, np.int64)
+    sg = np.empty((64, d))
     B = np.empty((64, d, d, d))
     for a in range(N):
         n = indptr[a + 1] - indptr[a] + 1
         if n > g.shape[0]:
             g = np.empty((2 * n, d))
             ids = np.empty(2 * n, np.int64)
+            sg = np.empty((2 * n, d))
         ids[0] = a
         for k in range(d):
             g[0, k] = 0.0
+            sg[0, k] = 1.0
         for q in range(1, n):
             p = indptr[a] + q - 1
-            ids[q] = indices[p]
+            m = indices[p]
+            ids[q] = src[m]
             for k in range(d):
                 g[q, k] = G[p, k]
                 g[0, k] -= G[p, k]
+                sg[q, k] = sign[m, k]
         Va = V[a]
         if Va == 0.0:
             continue
@@ -367,7 +434,16 @@ def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, vals):
                         v = 0.0
                         for m in range(d):
                             v += B[s, k, l, m] * g[t, m]
-                        vals[base + l] += v
+                        vals[base + l] += v * sg[s, k] * sg[t, l]
+
+
+def _fold(disc: Discretisation):
+    """(src, sign) of the stencil members — the particles, then the ghosts (:mod:`sph.mirror`)."""
+    N, d = disc.n, disc.dim
+    if not disc.n_ghost:
+        return np.arange(N, dtype=np.int64), np.ones((N, d))
+    return (np.concatenate([np.arange(N), disc.ghost_src]).astype(np.int64),
+            np.ascontiguousarray(np.concatenate([np.ones((N, d)), disc.ghost_sign])))
 
 
 def tangent_pattern(disc: Discretisation):
@@ -377,7 +453,7 @@ def tangent_pattern(disc: Discretisation):
     if cached is not None:
         return cached
     d = disc.dim
-    bptr, bcol = _tangent_pattern(disc.indptr, disc.indices)
+    bptr, bcol = _tangent_pattern(disc.indptr, disc.indices, _fold(disc)[0])
     nb = np.diff(bptr)
     row_len = np.repeat(nb * d, d)  # every DOF row (c, k) holds the blocks of row c, d wide
     indptr = np.zeros(disc.n * d + 1, np.int64)
@@ -392,11 +468,14 @@ def tangent_pattern(disc: Discretisation):
 
 def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
     """The symmetric Hessian ∂²Π/∂x∂x = −∂f/∂x, (N d × N d) CSR with sorted indices, from dP/dF
-    blocks A (N, d,d,d,d), assembled into the pattern of :func:`tangent_pattern`."""
+    blocks A (N, d,d,d,d), assembled into the pattern of :func:`tangent_pattern`. With symmetry
+    planes (:mod:`sph.mirror`): the Hessian of Π_q = Σ w_a V_a ψ(F_a) over the real and ghost
+    positions, folded onto the real DOFs, Tᵀ K_ext T (x_ghost = sign ⊙ x_src + offset)."""
     d = disc.dim
     indptr, indices, bptr, bcol = tangent_pattern(disc)
     vals = np.empty(indices.shape[0])
-    _assemble_tangent(disc.indptr, disc.indices, disc.G, disc.V, A, bptr, bcol, d, vals)
+    _assemble_tangent(disc.indptr, disc.indices, disc.G, disc.V_energy, A, bptr, bcol, d,
+                      *_fold(disc), vals)
     K = sp.csr_matrix((vals, indices, indptr), shape=(disc.n * d, disc.n * d))
     K.has_sorted_indices = True
     return K
@@ -409,7 +488,7 @@ def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
 @njit(parallel=True, fastmath=FASTMATH, **JIT)
 def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, indices, G, GT, V,
              h_a, h_b, prm, mat_id, all_svk, VP, status, hg_indptr, hg_indices, hg_data, imp,
-             dcol):
+             dcol, xe, gsrc, gsign, goff, w):
     """``n_steps`` velocity-Verlet steps from the synchronised state (x, v, acc):
     kick–drift; F → P (shared material routine) → V P; force → acceleration → kick.
     ``h_a`` holds the committed history on entry and on exit (``h_b`` is scratch). The hourglass
@@ -419,8 +498,12 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
     J2 history — the loop stops after the first step in which a J2 point reaches D ≥ 1 (for the
     pairs of :mod:`sph.crack` to be updated); −1: no such stop. Returns (steps done, why): why
     0 all done, 1 a failed material point (status ≠ 0) in the last step, 2 a point newly
-    damaged."""
+    damaged. Symmetry planes (:mod:`sph.mirror`; gsrc empty: none): ``xe`` (N + n_g, d) scratch
+    for the positions with the ghosts gsign ⊙ x[gsrc] + goff, the ghosts' V P mirrored after
+    the stress pass, the internal force times the shares ``w`` (N,)."""
     N, d = x.shape
+    ng = gsrc.shape[0]
+    xs = xe if ng > 0 else x
     track = imp.shape[0] > 0
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
     dummyF = np.zeros((0, 3, 3))
@@ -435,20 +518,31 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
     for s in range(n_steps):
         nbad = 0
         nnew = 0
+        if ng > 0:
+            for a in prange(N):
+                for i in range(d):
+                    xe[a, i] = x[a, i]
+            for g in prange(ng):
+                for i in range(d):
+                    xe[N + g, i] = gsign[g, i] * x[gsrc[g], i] + goff[g, i]
         for c in prange(N_CHUNKS):
             F = np.zeros((3, 3))
             P = np.empty((3, 3))
             A = np.empty((3, 3, 3, 3))
             for a in range(c * chunk, min(N, (c + 1) * chunk)):
                 if d == 2:
-                    nbad += _stress_row_2d(a, x, indptr, indices, G, V, h_a, prm, mat_id, all_svk,
+                    nbad += _stress_row_2d(a, xs, indptr, indices, G, V, h_a, prm, mat_id, all_svk,
                                            F, P, A, h_b, VP, status)
                 else:
-                    _stress_row(a, x, indptr, indices, G, V, h_a, prm, mat_id, False, F, P, A,
+                    _stress_row(a, xs, indptr, indices, G, V, h_a, prm, mat_id, False, F, P, A,
                                 h_b, VP, dummyF, dummyA, status)
                     nbad += status[a] != 0
                 if dcol >= 0 and prm[mat_id[a], 0] == 3.0 and h_b[a, dcol] >= 1.0 and h_a[a, dcol] < 1.0:
                     nnew += 1
+        for g in prange(ng):
+            for i in range(d):
+                for j in range(d):
+                    VP[N + g, i, j] = gsign[g, i] * VP[gsrc[g], i, j] * gsign[g, j]
         last = s == n_steps - 1 or nbad > 0 or nnew > 0
         drift_here = fuse and not last
         for a in prange(N):
@@ -457,11 +551,11 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
             o1 = acc[a, 1] * m[a]
             o2 = acc[a, d - 1] * m[a]
             if d == 2:
-                _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, acc)
+                _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, w[a], acc)
             else:
                 _force_row(a, VP, indptr, indices, G, GT, acc)
                 for i in range(d):
-                    acc[a, i] += f_ext[a, i]
+                    acc[a, i] = w[a] * acc[a, i] + f_ext[a, i]
             if hg_on:
                 for i in range(d):
                     for q in range(hg_indptr[a], hg_indptr[a + 1]):
@@ -553,14 +647,15 @@ def _stress_row_2d(a, x, indptr, indices, G, V, h_old, prm, mat_id, all_svk, F, 
 
 
 @njit(inline="always", **JIT)
-def _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, out):
-    """2-D specialisation of :func:`_force_row` plus the external force, into ``out[a]``."""
+def _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, wa, out):
+    """2-D specialisation of :func:`_force_row`, times the share ``wa`` (:mod:`sph.mirror`; 1
+    without symmetry planes), plus the external force, into ``out[a]``."""
     pa00 = VP[a, 0, 0]
     pa01 = VP[a, 0, 1]
     pa10 = VP[a, 1, 0]
     pa11 = VP[a, 1, 1]
-    f0 = f_ext[a, 0]
-    f1 = f_ext[a, 1]
+    f0 = 0.0
+    f1 = 0.0
     for p in range(indptr[a], indptr[a + 1]):
         b = indices[p]
         g0 = G[p, 0]
@@ -569,8 +664,8 @@ def _force_row_2d(a, VP, indptr, indices, G, GT, f_ext, out):
         h1 = GT[p, 1]
         f0 += pa00 * g0 + pa01 * g1 - VP[b, 0, 0] * h0 - VP[b, 0, 1] * h1
         f1 += pa10 * g0 + pa11 * g1 - VP[b, 1, 0] * h0 - VP[b, 1, 1] * h1
-    out[a, 0] = f0
-    out[a, 1] = f1
+    out[a, 0] = wa * f0 + f_ext[a, 0]
+    out[a, 1] = wa * f1 + f_ext[a, 1]
 
 
 def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: float,
@@ -596,13 +691,20 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
         numba.set_num_threads(1)
     imp = impulse if impulse is not None else np.zeros((0, x.shape[1]))
     dcol = HIST_DAMAGE if on_damage is not None and body.history.shape[1] > HIST_DAMAGE else -1
+    d = x.shape[1]
+    if dsc.n_ghost:
+        mir = (np.empty((dsc.n + dsc.n_ghost, d)), dsc.ghost_src.astype(np.int64),
+               dsc.ghost_sign, dsc.ghost_offset, dsc.w)
+    else:
+        mir = (np.empty((0, d)), np.zeros(0, np.int64), np.empty((0, d)), np.empty((0, d)),
+               np.ones(dsc.n))
     done = 0
     try:
         while done < n_steps:
             k, why = _advance(n_steps - done, x, v, acc, dsc.m, f_ext, fixed, v_fix, dt, damping,
                               dsc.indptr, dsc.indices, dsc.G, dsc.GT, dsc.V, body.history,
                               h_scratch, body.prm, body.mat_id, body.table.all_svk, body.VP,
-                              body.status, *hg, imp, dcol)
+                              body.status, *hg, imp, dcol, *mir)
             done += int(k)
             if why == 1:
                 break

@@ -340,24 +340,4 @@ def test_quarter_model_contact_is_a_quarter_of_the_full_beams():
     assert 4 * sq == pytest.approx(sf, rel=1e-12)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 12 gate 4 fails, not in the contact: with the contact "
-                   "weighted on the symmetry planes (sph.contact) the peak impact forces agree "
-                   "(every step recorded: A, 12.5 mm 584.0 kN quarter x4 against 584.2 full; before "
-                   "625.8), but the particle discretisation of the beam is not the mirrored full "
-                   "beam's: a particle near a symmetry plane has a one-sided kernel stencil (no "
-                   "mirror neighbours), and at 20 mm the quarter's half width holds two lattice "
-                   "lines, too few for the quadratic correction, so the quarter model falls back to "
-                   "the linear (Bonet-Lok) one while the full beam keeps the quadratic. Mid-span "
-                   "displacement over 0.5 ms 11.4 % apart at 20 mm (5.9 % with the linear correction "
-                   "in both, 1.7 % with an elastic mortar as well), 12.5 % at 12.5 mm (3.6 % elastic)")
-def test_quarter_model_matches_the_full_beam():
-    """Issue 12 gate 4: specimen A at 20 mm, nodal csph, the quarter model's mid-span displacement
-    history against the full beam's over the first 0.5 ms within 1 % of the full beam's largest
-    (the issue's bound)."""
-    w = {}
-    for sym in (True, False):
-        out = driver.solve("csph", RCBeam(symmetry=sym, t_end=5e-4, n_out=50), 5,
-                           integration="nodal")
-        w[sym] = (np.asarray(out["time"]), -np.asarray(out["midspan_w"]))
-    (tq, wq), (tf, wf) = w[True], w[False]
-    assert np.max(np.abs(wq - np.interp(tq, tf, wf))) <= 0.01 * np.max(np.abs(wf))
+# The quarter model against the full beam (issue 12 gate 4): tests/test_mirror.py.

@@ -50,13 +50,13 @@ Our choices (all parameters below; ``workbench list`` shows them):
   model's contact is weighted on its symmetry planes (:mod:`sph.contact`: a pair of particles
   both on a plane carries half its force, the planes read from the rollers), so that its contact
   forces and energy are exactly a quarter of the mirrored full beam's (A, 12.5 mm, nodal csph:
-  peak impact force 584.0 kN against the full beam's 584.2 kN; 625.8 kN unweighted). The gate
-  still fails (tests/test_rc_beam.py, strict xfail) in the particle discretisation of the beam: a
-  particle near a symmetry plane has a one-sided kernel stencil (no mirror neighbours), and at
-  20 mm the quarter's half width (two lattice lines) is too narrow for CSPH's quadratic
-  correction, which falls back to the linear one while the full beam keeps it (first flexural
-  period 5.57 against 5.01 ms; 5.57 against 5.55 ms with the linear correction in both): the
-  mid-span displacement over 0.5 ms is 11 % apart at 20 mm, 12 % at 12.5 mm;
+  peak impact force 584.0 kN against the full beam's 584.2 kN; 625.8 kN unweighted). CSPH
+  builds the quarter's discretisation on the full body and keeps mirror images of the neighbours
+  across the planes (:mod:`sph.mirror`), so the quarter moves as the full beam does, to
+  round-off (tests/test_mirror.py: mid-span displacement over 0.5 ms at 20 mm 1e-8 of the peak
+  apart). Classic SPH has no mirror images yet: its particles near a plane have one-sided
+  stencils (csph with ``mirror='none'`` shows the size of that: 11 % at 20 mm, 12 % at 12.5 mm,
+  partly because the quarter's half width at 20 mm is too narrow for the quadratic correction);
 * ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
 * ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
   contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic

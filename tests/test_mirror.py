@@ -1,0 +1,139 @@
+"""Symmetry planes by mirror images (sph.mirror): the quarter model of a symmetric body is the full
+body's discretisation restricted to a quarter, so it moves as the full body does.
+
+References: the full body discretised as a whole (``RCBeam(symmetry=False)``: the scene builds
+the mirrored boxes itself, no mirror code involved), the full body's run and modal periods, and
+central finite differences of the force for the folded tangent.
+"""
+import numpy as np
+import pytest
+
+from sph import driver
+from sph.csph import build
+from sph.mirror import full_particles, symmetry_planes
+from sph.particles import TOL, discretise
+from workbench.scenes.rc_beam import RCBeam
+from workbench.scenes.verification import BiMaterialBar
+
+# The quarter with mirror images evaluates the full body's stencils with the full body's
+# gradients, so the two differ only by round-off: the consistency solve and the correction are
+# computed on differently ordered particle sets (~1e-13 relative), and explicit dynamics carries
+# that over ~10³ steps without amplifying it (a stable, nearly linear response). 1e-6 of the peak
+# leaves three orders for that; the issue's bound is 1 %, and a one-sided stencil misses it.
+TOL_SAME_BODY = 1e-6
+
+
+def _ps(scene, r):
+    model, _ = driver.model_at(scene, r)
+    return model, discretise(model, r)
+
+
+def test_symmetry_planes_of_the_scenes():
+    """The quarter beam has the planes x = 0 and y = 0; the full beam none; the bi-material bar
+    only its end x = 0 (its lateral faces are held on both sides, a channel, not a mirror)."""
+    model, ps = _ps(RCBeam(), 5)
+    assert [(a, at) for a, at, _ in ps.mirrors] == [(0, 0.0), (1, 0.0)]
+    assert _ps(RCBeam(symmetry=False), 5)[1].mirrors == ()
+    bar = _ps(BiMaterialBar(dim=3), 2)[1]
+    assert [(a, at) for a, at, _ in bar.mirrors] == [(0, 0.0)]
+    assert symmetry_planes(model, ps, TOL * ps.dx) == ps.mirrors
+
+
+def test_full_particles_are_the_full_beams():
+    """The quarter's particles and their images are the full beam's particles (as positions per
+    region, with the same volumes and masses): the plane particles counted once with twice
+    (four times on both planes) their volume, their normal DOF free, the shares w = 2^-k."""
+    r = 5
+    _, q = _ps(RCBeam(), r)
+    _, f = _ps(RCBeam(symmetry=False), r)
+    im = full_particles(q, q.mirrors, TOL * q.dx)
+    full = im.full
+    assert full.n == f.n
+    key = lambda X: [tuple(k) for k in np.round(X / q.dx, 6)]
+    where = {k: i for i, k in enumerate(key(f.X))}
+    order = np.array([where[k] for k in key(full.X)])
+    assert np.array_equal(full.region, f.region[order])
+    assert np.allclose(full.V, f.V[order], rtol=1e-12, atol=0)
+    assert np.allclose(full.m, f.m[order], rtol=1e-12, atol=0)
+    on_x = np.abs(q.X[:, 0]) < 1e-9
+    on_y = np.abs(q.X[:, 1]) < 1e-9
+    assert np.array_equal(im.w, 0.5 ** (on_x.astype(int) + on_y))
+    free = ~q.clamped
+    assert not full.fixed[:q.n][on_x & free, 0].any() and not full.fixed[:q.n][on_y & free, 1].any()
+
+
+@pytest.fixture(scope="module")
+def beams():
+    """Specimen A at 20 mm over 0.5 ms, nodal csph: the quarter with mirror images, the quarter
+    with one-sided stencils (mirror='none') and the full beam."""
+    out = {}
+    for key, sym, opts in (("quarter", True, {}), ("one-sided", True, {"mirror": "none"}),
+                           ("full", False, {})):
+        out[key] = driver.solve("csph", RCBeam(symmetry=sym, t_end=5e-4, n_out=50), 5,
+                                integration="nodal", **opts)
+    return out
+
+
+def _midspan(out):
+    return np.asarray(out["time"]), -np.asarray(out["midspan_w"])
+
+
+def test_quarter_model_moves_as_the_full_beam(beams):
+    """Issue 12 gate 4: the quarter model's mid-span displacement history is the full beam's
+    (TOL_SAME_BODY of the peak; the issue asks 1 %). Without mirror images the one-sided stencils
+    at the planes miss the issue's 1 % (11 % at this spacing)."""
+    tf, wf = _midspan(beams["full"])
+    peak = np.max(np.abs(wf))
+    for key, bound in (("quarter", TOL_SAME_BODY), ("one-sided", None)):
+        t, w = _midspan(beams[key])
+        assert beams[key]["status"] == "ok"
+        err = np.max(np.abs(w - np.interp(t, tf, wf))) / peak
+        if bound is None:
+            assert err > 0.01, err
+        else:
+            assert err <= bound, err
+
+
+def test_quarter_model_energies_are_a_quarter_of_the_full_beams(beams):
+    """Kinetic and strain energy and external work of the quarter (its own masses and volumes:
+    the plane particles' shares) are a quarter of the full beam's at every record."""
+    q, f = beams["quarter"], beams["full"]
+    for name in ("kinetic_energy", "strain_energy", "external_work"):
+        a, b = 4 * np.asarray(q[name]), np.asarray(f[name])
+        assert np.max(np.abs(a - b)) <= TOL_SAME_BODY * np.max(np.abs(b)), name
+
+
+def test_quarter_modal_period_is_the_full_beams():
+    """The beam on its hinges (modal drive, consistent csph at 20 mm): the quarter's lowest
+    period (the folded tangent, the quarter's masses) is a period of the full beam — its first
+    flexural mode, symmetric about both planes. Generalised eigenvalues of matrices equal
+    to round-off: 1e-8 relative."""
+    from workbench.scenes.model import Modal
+
+    per = {sym: driver.solve("csph", RCBeam(symmetry=sym, structure="beam"), 5,
+                             drive=Modal(8))["periods"] for sym in (True, False)}
+    # the full beam on its hinge lines may also slide and turn in its plane (rigid modes, periods
+    # of round-off): the quarter's first period must be one of the full beam's
+    assert np.min(np.abs(per[False] / per[True][0] - 1)) < 1e-8, (per[True], per[False])
+
+
+def test_folded_tangent_is_the_derivative_of_the_force():
+    """K = −∂f/∂x of the quarter (ghost columns folded onto their sources) against central
+    differences of the force, on the DOFs the planes leave free, at a randomly deformed state of
+    the beam on its hinges below cracking. Differences at step 1e-9 m (strain 5e-8): truncation
+    O(h²) and round-off ~1e-16·|f|/h both below 1e-6 of |K v|."""
+    scene = RCBeam(structure="beam")
+    model, ps = _ps(scene, 5)
+    body = build(ps)
+    assert body.disc.n_ghost > 0
+    rng = np.random.default_rng(1)
+    free = ~ps.fixed
+    x = ps.X + 1e-7 * rng.standard_normal(ps.X.shape) * free  # strain ~5e-6 < f_t/E: elastic
+    f, A = body.tl.evaluate(x, tangent=True)
+    K = body.tl.tangent(A)
+    v = rng.standard_normal(ps.X.shape) * free
+    h = 1e-9
+    fd = (body.tl.evaluate(x + h * v) - body.tl.evaluate(x - h * v)) / (2 * h)
+    Kv = (K @ v.ravel()).reshape(v.shape)
+    err = np.abs((Kv + fd)[free]).max() / np.abs(Kv[free]).max()
+    assert err < 1e-6, err
