@@ -39,6 +39,7 @@ plate's time loop).
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -271,8 +272,9 @@ def rates_kernel(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, m
     overwritten), the stress — hypoelastic (Jaumann, λ (N,), μ (N,) per particle, Pa) or, with
     ``hyper``, hyperelastic through F (N, 3, 3) and the material row prm[mat_id[i]] with history
     hist → hist_new (N, n_history) — into ``sigma`` (N, 3, 3) Cauchy, Pa, and, where ε = eps_as > 0,
-    the artificial-stress tensor into R (N, d, d). ``status`` (N,) the material status (0 ok)."""
-    N, d = x.shape
+    the artificial-stress tensor into R (N, d, d). ``status`` (N,) the material status (0 ok).
+    The rows are those of ``indptr``; x, v, m, rho (and kf) may also hold ghosts (:mod:`sph.mirror`)."""
+    N, d = indptr.shape[0] - 1, x.shape[1]
     chunk = (N + N_CHUNKS - 1) // N_CHUNKS
     for c in prange(N_CHUNKS):
         L = np.empty((3, 3))
@@ -403,8 +405,9 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
     """Accelerations (N, d) into ``acc`` (eq. 1 plus a_ext (N, d), m/s²; c (N,) the particles'
     P-wave speeds, m/s) and, with ``do_kick``, the closing half kick (step 4–5). The kick is a
     separate loop: the viscosity reads the neighbours' velocities, which must not be kicked while
-    they are read. Returns the number of non-finite accelerations."""
-    N, d = x.shape
+    they are read. Returns the number of non-finite accelerations. The rows are those of
+    ``indptr``; the neighbours' arrays may also hold ghosts (:mod:`sph.mirror`)."""
+    N, d = indptr.shape[0] - 1, x.shape[1]
     bad = 0
     for i in prange(N):
         if d == 2:
@@ -429,12 +432,13 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
 
 
 @njit(parallel=True, **JIT)
-def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta):
+def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta, m_own):
     """Power of Monaghan's artificial viscosity (the Π_ij term of eq. 1), W (W/m in 2-D):
     Σ_i m_i a^Π_i · v_i = −½ Σ_i Σ_j m_i m_j Π_ij (W'(r_ij)/r_ij) x_ij · v_ij ≤ 0 (the pair term is
     antisymmetric; Π_ij > 0 only for approaching pairs, v_ij · x_ij < 0, and W' < 0). Its negative
-    times the step is the energy the viscosity dissipates in that step."""
-    N, d = x.shape
+    times the step is the energy the viscosity dissipates in that step. m_i is ``m_own`` (N,): the
+    particles' own masses where ``m`` holds the full body's (symmetry planes, :mod:`sph.mirror`)."""
+    N, d = indptr.shape[0] - 1, x.shape[1]
     total = 0.0
     for i in prange(N):
         s = 0.0
@@ -453,7 +457,7 @@ def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta):
             pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
                      / (0.5 * (rho[i] + rho[j])))
             s += m[j] * pi_ij * dw_dr(r, h, 0, d) / r * vr
-        total += -0.5 * m[i] * s
+        total += -0.5 * m_own[i] * s
     return total
 
 
@@ -475,7 +479,7 @@ class Body:
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
                  artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
-                 viscous_work=False, kernel_reduction=False):
+                 viscous_work=False, kernel_reduction=False, mirrors=()):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
@@ -546,6 +550,11 @@ class Body:
         self.impulse = None  # (N, d) or None: the impulse of the force on each fixed DOF is added
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
         self.kf = np.ones(N) if kernel_reduction else None  # the kernel factors, or None: off
+        self.mirrors = tuple((int(a), float(at)) for a, at, *_ in mirrors)
+        on = [np.abs(self.X[:, a] - at) <= 1e-6 * self.dx for a, at in self.mirrors]
+        self._on = np.stack(on, axis=1) if on else np.zeros((N, 0), bool)
+        self.m_full = self.m / 0.5 ** self._on.sum(axis=1)  # a plane particle's whole mass
+        self._ghosts = None
         self._accelerations(0.0, kick=False)
 
     @property
@@ -558,11 +567,61 @@ class Body:
 
     def _neighbours(self, x):
         """The shared cell list at the current positions; particles of different bodies
-        (``body`` labels) do not interact through the kernel (they meet through contact only)."""
+        (``body`` labels) do not interact through the kernel (they meet through contact only).
+        With symmetry planes the ghosts of :meth:`_find_ghosts` are among the neighbours (their
+        indices ≥ N; the rows are the particles')."""
+        N = self.n
+        if self.mirrors:
+            self._find_ghosts(x)
+            src = self._ghosts[0]
+            x = np.concatenate([x, self._ghosts[1] * x[src] + self._ghosts[2]])
         indptr, indices = neighbour_list(x, SUPPORT * self.h)
         if self.body is not None:
-            indptr, indices = drop_cross_body(indptr, indices, self.body)
+            body = self.body if not self.mirrors else np.concatenate([self.body, self.body[src]])
+            indptr, indices = drop_cross_body(indptr, indices, body)
+        if self.mirrors:
+            indptr, indices = indptr[:N + 1], indices[:indptr[N]]
         return indptr, indices
+
+    def _find_ghosts(self, x):
+        """Mirror images (:mod:`sph.mirror`) of the particles within the kernel support 2h of every
+        plane of a combination of the symmetry planes, at the current positions x (a plane
+        particle is its own image in its plane): (src, sign, offset) into ``_ghosts``."""
+        N, d = x.shape
+        reach = SUPPORT * self.h
+        src, sign, off = [], [], []
+        P = len(self.mirrors)
+        for r in range(1, P + 1):
+            for combo in itertools.combinations(range(P), r):
+                sel = np.ones(N, bool)
+                sg = np.ones(d)
+                of = np.zeros(d)
+                for j in combo:
+                    a, at = self.mirrors[j]
+                    sel &= ~self._on[:, j] & (np.abs(x[:, a] - at) <= reach)
+                    sg[a] = -1.0
+                    of[a] = 2.0 * at
+                idx = np.flatnonzero(sel)
+                src.append(idx)
+                sign.append(np.broadcast_to(sg, (len(idx), d)))
+                off.append(np.broadcast_to(of, (len(idx), d)))
+        self._ghosts = (np.concatenate(src), np.concatenate(sign), np.concatenate(off))
+
+    def _extended(self, x, v, rho, sigma, R):
+        """The arrays the neighbours are read from: the particles' (masses the full body's, for a
+        plane particle its whole mass) and their ghosts' (mirrored: x, v by sign and offset, σ and
+        R by R = diag(sign) on both sides). Without symmetry planes, the particles' own."""
+        if not self.mirrors:
+            return x, v, self.m, rho, sigma, R, self.c, self.kf
+        src, sg, of = self._ghosts
+        d = x.shape[1]
+        s3 = np.ones((len(src), 3))
+        s3[:, :d] = sg
+        cat = np.concatenate
+        kf = None if self.kf is None else cat([self.kf, self.kf[src]])
+        return (cat([x, sg * x[src] + of]), cat([v, sg * v[src]]), cat([self.m_full, self.m_full[src]]),
+                cat([rho, rho[src]]), cat([sigma, s3[:, :, None] * sigma[src] * s3[:, None, :]]),
+                cat([R, sg[:, :, None] * R[src] * sg[:, None, :]]), cat([self.c, self.c[src]]), kf)
 
     def _a_ext(self):
         if self.extra_force is None:
@@ -573,10 +632,19 @@ class Body:
         self.indptr, self.indices = self._neighbours(self.x)
         if self.kf is not None:
             kernel_factors(self.table, self.mat_id, self.hist, self.kf)
-        return force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
-                          self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
-                          self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
-                          self.damping, kick, self.kf)
+        return self._force_pass(self._a_ext(), self.acc, dt, kick)
+
+    def _force_pass(self, a_ext, acc, dt, kick, indptr=None, indices=None):
+        """:func:`force_pass` at the current state, the ghosts of the symmetry planes included
+        (their velocities are a copy: the kick is carried back to the particles)."""
+        x, v, m, rho, sigma, R, c, kf = self._extended(self.x, self.v, self.rho, self.sigma, self.R)
+        bad = force_pass(x, v, m, rho, sigma, R, self.indptr if indptr is None else indptr,
+                         self.indices if indices is None else indices, self.h, c, self.alpha,
+                         self.beta, self.n_as, self.w_dx, a_ext, acc, self.fixed, self.v_fix, dt,
+                         self.damping, kick, kf)
+        if kick and v is not self.v:
+            self.v[:] = v[:self.n]
+        return bad
 
     def step(self, dt: float, n: int = 1) -> int:
         """``n`` steps of size dt; returns the steps completed (fewer if the state became
@@ -593,25 +661,25 @@ class Body:
             f_old = self.acc.ravel()[fx] * m_fx if fx is not None else None
             kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
             self.indptr, self.indices = self._neighbours(self.x)
-            rates_pass(self.x, self.v, self.m, self.rho, self.rho_new, self.sigma, self.F,
+            x, v, m, rho, _, _, _, kf = self._extended(self.x, self.v, self.rho, self.sigma,
+                                                       self.R)
+            rates_pass(x, v, m, rho, self.rho_new, self.sigma, self.F,
                        self.indptr, self.indices, self.h, dt, self.lam, self.mu, self.hyper,
                        self.prm, self.mat_id, self.hist, self.hist_new, self.eps_as, self.status,
-                       self.R, self.kf)
+                       self.R, kf)
             self.rho, self.rho_new = self.rho_new, self.rho
             if self.hist.shape[1]:
                 self.hist, self.hist_new = self.hist_new, self.hist
             if self.kf is not None:  # the particles released by this step's history
                 kernel_factors(self.table, self.mat_id, self.hist, self.kf)
-            bad = force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, self.indptr,
-                             self.indices, self.h, self.c, self.alpha, self.beta, self.n_as,
-                             self.w_dx, self._a_ext(), self.acc, self.fixed, self.v_fix, dt,
-                             self.damping, True, self.kf)
+            bad = self._force_pass(self._a_ext(), self.acc, dt, True)
             if fx is not None:
                 self.impulse.ravel()[fx] += 0.5 * dt * (f_old + self.acc.ravel()[fx] * m_fx)
             if self.track_viscous:
-                self.viscous_work -= dt * viscous_power(self.x, self.v, self.m, self.rho,
-                                                        self.indptr, self.indices, self.h, self.c,
-                                                        self.alpha, self.beta)
+                x, v, m, rho, _, _, c, _ = self._extended(self.x, self.v, self.rho, self.sigma,
+                                                          self.R)
+                self.viscous_work -= dt * viscous_power(x, v, m, rho, self.indptr, self.indices,
+                                                        self.h, c, self.alpha, self.beta, self.m)
             self.t += dt
             self.steps += 1
             if bad or self.status.any() or not np.isfinite(self.x).all():
@@ -622,9 +690,7 @@ class Body:
         """Particle forces m a (N, d) of the current state (no external load), N."""
         acc = np.zeros_like(self.acc)
         indptr, indices = self._neighbours(self.x)
-        force_pass(self.x, self.v, self.m, self.rho, self.sigma, self.R, indptr, indices, self.h,
-                   self.c, self.alpha, self.beta, self.n_as, self.w_dx, np.zeros_like(self.acc),
-                   acc, self.fixed, self.v_fix, 0.0, 0.0, False, self.kf)
+        self._force_pass(np.zeros_like(self.acc), acc, 0.0, False, indptr, indices)
         return acc * self.m[:, None]
 
     def energies(self) -> tuple[float, float]:
@@ -657,7 +723,9 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 
                viscous_work="track the energy the artificial viscosity dissipates (default False: "
                             "one more pair loop per step)",
                kernel_reduction="003 4.2(2): kernels across fully released mortar particles x "
-                                "phi_min (default False; needs stress='hyperelastic')")
+                                "phi_min (default False; needs stress='hyperelastic')",
+               mirror="'auto' (default: the scene's symmetry planes by mirror images rebuilt "
+                      "every step, sph.mirror) | 'none' (a one-sided stencil at a symmetry plane)")
 
 
 class Classic(ParticleBody):
@@ -669,16 +737,20 @@ class Classic(ParticleBody):
 
     def __init__(self, particles, h_ratio: float = 1.3, stress: str = "hypoelastic",
                  alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
-                 n_as: int = 4, viscous_work: bool = False, kernel_reduction: bool = False):
+                 n_as: int = 4, viscous_work: bool = False, kernel_reduction: bool = False,
+                 mirror: str = "auto"):
         super().__init__(particles)
         ps = particles
+        if mirror not in ("auto", "none"):
+            raise ValueError(f"mirror: {mirror!r} is not one of 'auto', 'none'")
         if ps.plane == "stress":
             raise ValueError("plane: 'stress' is not modelled by sph (plane strain: L_zz = 0); "
                              "allowed: 'strain' or a 3-D model")
         self.b = Body(ps.X, ps.V, ps.table, ps.dx, h_ratio, stress, alpha, beta,
                       artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
                       mat_id=ps.mat_id, viscous_work=viscous_work,
-                      kernel_reduction=kernel_reduction)
+                      kernel_reduction=kernel_reduction,
+                      mirrors=ps.mirrors if mirror == "auto" else ())
         self.b.impulse = self.impulse
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc

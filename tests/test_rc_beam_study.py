@@ -81,7 +81,7 @@ def test_viscous_power_is_the_viscous_forces_power():
         return a
 
     ref = float(np.sum(m[:, None] * (acc(1.0, 2.0) - acc(0.0, 0.0)) * v))
-    got = viscous_power(x, v, m, rho, indptr, indices, h, c, 1.0, 2.0)
+    got = viscous_power(x, v, m, rho, indptr, indices, h, c, 1.0, 2.0, m)
     assert ref < 0  # it dissipates
     assert got == pytest.approx(ref, rel=1e-10)
 

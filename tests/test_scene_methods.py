@@ -136,8 +136,11 @@ SPH_BARS = ((2, 2), (2, 4), (2, 8), (3, 2))
 
 @pytest.fixture(scope="module")
 def sph_bars():
-    """(dim, res) → classic SPH's relaxed result on BiMaterialBar(dim)."""
-    return {(d, r): driver.solve("sph", BiMaterialBar(dim=d), r) for d, r in SPH_BARS}
+    """(dim, res) → classic SPH's relaxed result on BiMaterialBar(dim), without mirror images at
+    its end x = 0 (mirror='none'): the linearised reference (linear_bar_reaction) is the one-sided
+    discretisation, and the boundary deficiency below is what these runs are here to show."""
+    return {(d, r): driver.solve("sph", BiMaterialBar(dim=d), r, mirror="none")
+            for d, r in SPH_BARS}
 
 
 @pytest.mark.parametrize("dim,res", SPH_BARS)

@@ -54,9 +54,10 @@ Our choices (all parameters below; ``workbench list`` shows them):
   builds the quarter's discretisation on the full body and keeps mirror images of the neighbours
   across the planes (:mod:`sph.mirror`), so the quarter moves as the full beam does, to
   round-off (tests/test_mirror.py: mid-span displacement over 0.5 ms at 20 mm 1e-8 of the peak
-  apart). Classic SPH has no mirror images yet: its particles near a plane have one-sided
-  stencils (csph with ``mirror='none'`` shows the size of that: 11 % at 20 mm, 12 % at 12.5 mm,
-  partly because the quarter's half width at 20 mm is too narrow for the quadratic correction);
+  apart); classic SPH rebuilds its ghosts every step (1e-12 at 12.5 mm). With one-sided
+  stencils (``mirror='none'``) csph is 11 % off at 20 mm (partly because the quarter's half
+  width there is too narrow for the quadratic correction), 12 % at 12.5 mm, classic SPH 17 % at
+  12.5 mm (specimen B, 0.5 ms);
 * ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
 * ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
   contact) on hinges — the line x = span/2, z = 0 held along z — with a modal drive: the elastic
