@@ -136,6 +136,8 @@ def full_particles(ps, planes, tol: float) -> Images:
     sides = tuple((a, at, 1.0 if np.all(ps.X[:, a] >= at - tol) else -1.0) for a, at, _ in planes)
     full = replace(ps, X=np.ascontiguousarray(X), V=(ps.V / w)[src], mat_id=ps.mat_id[src],
                    region=ps.region[src], body=ps.body[src], held=ps.held[src],
+                   # normals: the quarter's mirrored (a plane particle's keeps its plane face);
+                   # the consistent integration recomputes them on the folded domain
                    normals=sign * ps.normals[src], sets={}, probes={}, fixed=fixed[src],
                    clamped=ps.clamped[src], domain=ps.domain[src],
                    domain_shape=(None if ps.domain_shape is None

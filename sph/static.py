@@ -103,7 +103,7 @@ def spacing(body: Body) -> float:
     """Smallest neighbour distance of the reference configuration (the particle spacing), m."""
     d = body.disc
     a = np.repeat(np.arange(d.n), np.diff(d.indptr))
-    return float(np.linalg.norm(d.X[d.indices] - d.X[a], axis=1).min())
+    return float(np.linalg.norm(d.extend(d.X)[d.indices] - d.X[a], axis=1).min())
 
 
 def dynamic_relaxation(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndarray,

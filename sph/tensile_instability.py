@@ -185,6 +185,9 @@ def lagrangian_rates(disc, S, dx: float) -> np.ndarray:
     is positive semi-definite: no tensile instability. dx the spacing, m."""
     if not dx > 0:
         raise ValueError(f"dx: {dx!r} is not allowed; the spacing must be > 0")
+    if disc.n_ghost:
+        raise ValueError("disc: mirror images (symmetry planes) are not allowed here; build the "
+                         "body with mirror='none'")
     N, d = disc.X.shape
     S = np.ascontiguousarray(np.asarray(S, dtype=np.float64)[:, :d, :d])
     X = np.ascontiguousarray(disc.X)
