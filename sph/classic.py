@@ -39,7 +39,6 @@ plate's time loop).
 """
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
@@ -52,6 +51,7 @@ from workbench.materials.tensor import eig_sym3_closed
 from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
 from .method import ParticleBody
+from .mirror import on_planes, plane_images
 from .neighbours import drop_cross_body, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
@@ -551,8 +551,7 @@ class Body:
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
         self.kf = np.ones(N) if kernel_reduction else None  # the kernel factors, or None: off
         self.mirrors = tuple((int(a), float(at)) for a, at, *_ in mirrors)
-        on = [np.abs(self.X[:, a] - at) <= 1e-6 * self.dx for a, at in self.mirrors]
-        self._on = np.stack(on, axis=1) if on else np.zeros((N, 0), bool)
+        self._on = on_planes(self.X, self.mirrors, 1e-6 * self.dx)
         self.m_full = self.m / 0.5 ** self._on.sum(axis=1)  # a plane particle's whole mass
         self._ghosts = None
         self._accelerations(0.0, kick=False)
@@ -587,25 +586,9 @@ class Body:
         """Mirror images (:mod:`sph.mirror`) of the particles within the kernel support 2h of every
         plane of a combination of the symmetry planes, at the current positions x (a plane
         particle is its own image in its plane): (src, sign, offset) into ``_ghosts``."""
-        N, d = x.shape
         reach = SUPPORT * self.h
-        src, sign, off = [], [], []
-        P = len(self.mirrors)
-        for r in range(1, P + 1):
-            for combo in itertools.combinations(range(P), r):
-                sel = np.ones(N, bool)
-                sg = np.ones(d)
-                of = np.zeros(d)
-                for j in combo:
-                    a, at = self.mirrors[j]
-                    sel &= ~self._on[:, j] & (np.abs(x[:, a] - at) <= reach)
-                    sg[a] = -1.0
-                    of[a] = 2.0 * at
-                idx = np.flatnonzero(sel)
-                src.append(idx)
-                sign.append(np.broadcast_to(sg, (len(idx), d)))
-                off.append(np.broadcast_to(of, (len(idx), d)))
-        self._ghosts = (np.concatenate(src), np.concatenate(sign), np.concatenate(off))
+        near = np.abs(x[:, [a for a, _ in self.mirrors]] - [at for _, at in self.mirrors]) <= reach
+        self._ghosts = plane_images(x, self.mirrors, self._on, near)
 
     def _extended(self, x, v, rho, sigma, R):
         """The arrays the neighbours are read from: the particles' (masses the full body's, for a

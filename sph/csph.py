@@ -200,7 +200,6 @@ class CSPH(ParticleBody):
 
             images = full_particles(ps, ps.mirrors, 1e-6 * ps.dx)
             ps = images.full
-        self.mirrors = () if images is None else particles.mirrors  # the planes mirrored
         body = ps.body if len(ps.body_names) > 1 else None
         if integration == "consistent":
             disc, self.consistency = consistent(ps, h_ratio, kernel, correction,

@@ -105,6 +105,39 @@ class Images:
     w: np.ndarray
 
 
+def on_planes(X, planes, tol: float) -> np.ndarray:
+    """(N, P) bool: point i of X (N, d) lies on plane j of ``planes`` ((axis, at, ...), ...) to
+    ``tol`` (m)."""
+    X = np.asarray(X)
+    return np.stack([np.abs(X[:, p[0]] - p[1]) <= tol for p in planes], axis=1) if planes \
+        else np.zeros((len(X), 0), bool)
+
+
+def plane_images(X, planes, on, near=None):
+    """The images of the points X (N, d) in every combination of the ``planes`` ((axis, at, ...),
+    ...): point i has one in a combination when it lies on none of its planes (``on`` (N, P),
+    :func:`on_planes`: there it is its own image) and, given ``near`` (N, P) bool, is near every
+    one of them. Returns (src, sign, offset): image = sign ⊙ X[src] + offset, sign ±1 and offset
+    2·at on the mirrored axes."""
+    N, d = np.shape(X)
+    src, sign, offset = [np.zeros(0, np.int64)], [np.zeros((0, d))], [np.zeros((0, d))]
+    for r in range(1, len(planes) + 1):
+        for combo in itertools.combinations(range(len(planes)), r):
+            c = list(combo)
+            sel = ~on[:, c].any(axis=1)
+            if near is not None:
+                sel &= near[:, c].all(axis=1)
+            idx = np.flatnonzero(sel)
+            s, o = np.ones(d), np.zeros(d)
+            for j in combo:
+                s[planes[j][0]] = -1.0
+                o[planes[j][0]] = 2.0 * planes[j][1]
+            src.append(idx)
+            sign.append(np.tile(s, (len(idx), 1)))
+            offset.append(np.tile(o, (len(idx), 1)))
+    return np.concatenate(src), np.concatenate(sign), np.concatenate(offset)
+
+
 def full_particles(ps, planes, tol: float) -> Images:
     """The particles ``ps`` and their images in every combination of the symmetry ``planes``
     ((axis, at, set name), ...; :func:`symmetry_planes`): an image is made only where the particle
@@ -112,23 +145,12 @@ def full_particles(ps, planes, tol: float) -> Images:
     planes gets 2^k times its volume and mass in the full body; its fixed DOFs along the normals
     of those planes are released (the full body's symmetry holds them), unless it is clamped."""
     N, d = ps.X.shape
-    on = np.stack([np.abs(ps.X[:, a] - at) <= tol for a, at, _ in planes], axis=1)
-    k = on.sum(axis=1)
-    w = 0.5 ** k
-    src, sign, offset = [np.arange(N)], [np.ones((N, d))], [np.zeros((N, d))]
-    for r in range(1, len(planes) + 1):
-        for combo in itertools.combinations(range(len(planes)), r):
-            sel = np.flatnonzero(~on[:, list(combo)].any(axis=1))
-            s = np.ones((len(sel), d))
-            c = np.zeros((len(sel), d))
-            for j in combo:
-                a, at, _ = planes[j]
-                s[:, a] = -1.0
-                c[:, a] = 2.0 * at
-            src.append(sel); sign.append(s); offset.append(c)
-    src = np.concatenate(src)
-    sign = np.concatenate(sign)
-    offset = np.concatenate(offset)
+    on = on_planes(ps.X, planes, tol)
+    w = 0.5 ** on.sum(axis=1)
+    s_i, g_i, o_i = plane_images(ps.X, planes, on)
+    src = np.concatenate([np.arange(N), s_i])
+    sign = np.concatenate([np.ones((N, d)), g_i])
+    offset = np.concatenate([np.zeros((N, d)), o_i])
     X = sign * ps.X[src] + offset
     fixed = ps.fixed.copy()
     for j, (a, at, _) in enumerate(planes):
