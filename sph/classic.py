@@ -51,7 +51,7 @@ from workbench.materials.tensor import eig_sym3_closed
 from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
 from .method import ParticleBody
-from .mirror import on_planes, plane_images
+from .mirror import on_planes, plane_images, with_images
 from .neighbours import drop_cross_body, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
@@ -589,6 +589,9 @@ class Body:
         reach = SUPPORT * self.h
         near = np.abs(x[:, [a for a, _ in self.mirrors]] - [at for _, at in self.mirrors]) <= reach
         self._ghosts = plane_images(x, self.mirrors, self._on, near)
+        src = self._ghosts[0]  # what does not change within the step
+        self._ghost_m = with_images(self.m_full, src)
+        self._ghost_c = with_images(self.c, src)
 
     def _extended(self, x, v, rho, sigma, R):
         """The arrays the neighbours are read from: the particles' (masses the full body's, for a
@@ -597,14 +600,10 @@ class Body:
         if not self.mirrors:
             return x, v, self.m, rho, sigma, R, self.c, self.kf
         src, sg, of = self._ghosts
-        d = x.shape[1]
-        s3 = np.ones((len(src), 3))
-        s3[:, :d] = sg
-        cat = np.concatenate
-        kf = None if self.kf is None else cat([self.kf, self.kf[src]])
-        return (cat([x, sg * x[src] + of]), cat([v, sg * v[src]]), cat([self.m_full, self.m_full[src]]),
-                cat([rho, rho[src]]), cat([sigma, s3[:, :, None] * sigma[src] * s3[:, None, :]]),
-                cat([R, sg[:, :, None] * R[src] * sg[:, None, :]]), cat([self.c, self.c[src]]), kf)
+        kf = None if self.kf is None else with_images(self.kf, src)
+        return (with_images(x, src, sg, of), with_images(v, src, sg), self._ghost_m,
+                with_images(rho, src), with_images(sigma, src, sg), with_images(R, src, sg),
+                self._ghost_c, kf)
 
     def _a_ext(self):
         if self.extra_force is None:

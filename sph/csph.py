@@ -310,7 +310,7 @@ class CSPH(ParticleBody):
         if self.cracks is not None:
             tension &= ~self.cracks.failed & ~self.cracks.detached
         on = tension[rows] & np.any(d.G != 0.0, axis=1)
-        cols = d.indices if not d.n_ghost else np.concatenate([np.arange(d.n), d.ghost_src])[d.indices]
+        cols = d.member_src[d.indices]  # a ghost joins its source
         g = coo_matrix((np.ones(on.sum()), (rows[on], cols[on])), shape=(d.n, d.n))
         return connected_components(g, directed=False)[1]
 

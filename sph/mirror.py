@@ -138,6 +138,21 @@ def plane_images(X, planes, on, near=None):
     return np.concatenate(src), np.concatenate(sign), np.concatenate(offset)
 
 
+def with_images(a, src, sign=None, offset=None):
+    """``a`` (N, ...) followed by its rows ``src`` as seen in the mirrors: a scalar per row as it
+    is; a vector (n, d) as sign ⊙ a[src] + offset (a position; a velocity without offset); a
+    tensor (n, k, k) as R a[src] R with R = diag(sign) padded with ones to k (a plane-strain
+    σ_zz keeps its sign)."""
+    img = a[src]
+    if sign is not None and a.ndim == 2:
+        img = sign * img + (0.0 if offset is None else offset)
+    elif sign is not None and a.ndim == 3:
+        s = np.ones((len(src), a.shape[1]))
+        s[:, :sign.shape[1]] = sign
+        img = s[:, :, None] * img * s[:, None, :]
+    return np.concatenate([a, img])
+
+
 def full_particles(ps, planes, tol: float) -> Images:
     """The particles ``ps`` and their images in every combination of the symmetry ``planes``
     ((axis, at, set name), ...; :func:`symmetry_planes`): an image is made only where the particle

@@ -89,18 +89,28 @@ class Discretisation:
         share w of a particle on symmetry planes (:mod:`sph.mirror`); V without them."""
         return self.V if self.w is None else self.V * self.w
 
+    @property
+    def member_src(self) -> np.ndarray:
+        """(n + n_ghost,) the particle each index of ``indices`` stands for: itself, or a ghost's
+        source."""
+        src = np.arange(self.n, dtype=np.int64)
+        return src if self.ghost_src is None else np.concatenate([src, self.ghost_src])
+
     def extend(self, x) -> np.ndarray:
         """Positions of the particles and their ghosts, (n + n_ghost, d); x itself without
         ghosts."""
         if self.ghost_src is None:
             return x
-        return np.concatenate([x, self.ghost_sign * x[self.ghost_src] + self.ghost_offset])
+        from .mirror import with_images
+
+        return with_images(x, self.ghost_src, self.ghost_sign, self.ghost_offset)
 
     def mirror_VP(self, VP) -> None:
         """The ghosts' rows of VP (n + n_ghost, d, d), in place: R (V P)_src R, R = diag(sign)."""
         if self.ghost_src is not None:
-            s = self.ghost_sign
-            VP[self.n:] = s[:, :, None] * VP[self.ghost_src] * s[:, None, :]
+            from .mirror import with_images
+
+            VP[self.n:] = with_images(VP[:self.n], self.ghost_src, self.ghost_sign)[self.n:]
 
     @property
     def n(self) -> int:
@@ -440,10 +450,8 @@ def _assemble_tangent(indptr, indices, G, V, A, bptr, bcol, d, src, sign, vals):
 def _fold(disc: Discretisation):
     """(src, sign) of the stencil members — the particles, then the ghosts (:mod:`sph.mirror`)."""
     N, d = disc.n, disc.dim
-    if not disc.n_ghost:
-        return np.arange(N, dtype=np.int64), np.ones((N, d))
-    return (np.concatenate([np.arange(N), disc.ghost_src]).astype(np.int64),
-            np.ascontiguousarray(np.concatenate([np.ones((N, d)), disc.ghost_sign])))
+    sign = np.ones((N, d)) if not disc.n_ghost else np.concatenate([np.ones((N, d)), disc.ghost_sign])
+    return disc.member_src, np.ascontiguousarray(sign)
 
 
 def tangent_pattern(disc: Discretisation):
