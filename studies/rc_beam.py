@@ -246,7 +246,8 @@ CRACK_DAMAGE = 1.0 - 1e-6
 """A mortar particle is cracked where the largest eigenvalue of its damage tensor Ω reaches 1: a
 direction with φ = 0, its normal stress fully released (an open crack, :mod:`workbench.materials.mortar`;
 the same criterion as the strain stand-in's principal strain above ε_0). The margin: Ω is raised
-to exactly 1 along a principal direction; round-off of the eigen-analysis only."""
+to κ/ε_0 ≥ 1 along a crack axis once its normal strain κ reaches ε_0; round-off of the
+eigen-analysis only."""
 
 
 def damage_tensors(history: np.ndarray) -> np.ndarray:

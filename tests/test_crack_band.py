@@ -8,9 +8,11 @@ without it it scales with Δx (Bažant & Belytschko's mesh dependence).
 
 Measured (2 shared cores; the runs 15–40 s together, with the machine's load): the band is two
 lattice columns in both methods (the scene's docstring says why), so the energy per crack area is
-2 G_F: with eq. 5, csph 1.9997 G_F at 5, 3.33 and 2.5 mm, classic SPH 2.132 / 2.101 / 2.073;
-without it the same multiples of G_F(Δx) ∝ Δx: csph 136.8 / 91.2 / 68.4 J/m², sph 145.9 / 95.4 /
-70.5 J/m²."""
+2 G_F: with eq. 5, csph 2.0002 / 2.0003 / 2.0001 G_F at 5, 3.33 and 2.5 mm, classic SPH 2.200 /
+2.162 / 2.111; without it the same multiples of G_F(Δx) ∝ Δx: csph 136.9 / 91.2 / 68.4 J/m², sph
+150.6 / 98.4 / 72.2 J/m². (Before the mortar law's crack frame was fixed, classic SPH gave 2.132 /
+2.101 / 2.073: the turning principal directions of its free-surface particles ratcheted their
+damage up, releasing the band's surface particles fully and shortening the softening tail.)"""
 import math
 
 import numpy as np
@@ -37,14 +39,18 @@ integration, sph.spectrum), 0.4 of classic SPH's (2.5–3.4)."""
 BAND = 2
 """Layers of the crack band: two lattice columns (a particle's gradient spans its neighbours, not
 itself: a jump between two columns is a strain of both)."""
-TOL_BAND = {"csph": 0.01, "sph": 0.10}
-"""|energy per crack area / (2 G_F) − 1|. Exact for the two fully released columns (the law
-releases g_F per unit volume; the midpoint rule's E Δε²/8 with Δε of one time step, ~1e-9 of
+TOL_BAND = 0.01
+"""|energy per crack area / (2 G_F) − 1| for csph. Exact for the two fully released columns (the
+law releases g_F per unit volume; the midpoint rule's E Δε²/8 with Δε of one time step, ~1e-9 of
 it). What may be added is the partial damage of the columns beside the band, which see across
 the opening crack through their second neighbours: none with csph's nodal integration (the
-integration-consistent csph leaves 2–4 %), so 1 % for csph; classic SPH's Eulerian kernel (support
-2.6 Δx) damages its free-surface particles beside the band (0.3–0.45 G_F) while the band's own
-free-surface particles stop short of full release (damage ~0.99; 0.25–0.33 layers), so 10 %."""
+integration-consistent csph leaves 2–4 %), so 1 %. Classic SPH has no such bound: its Eulerian
+kernel (support 2.6 Δx) damages the columns beside the band, and its band's free-surface
+particles lag (truncated kernel) and stop short of full release (damage 0.98), so its softening
+tail creeps on and the energy at the run's end depends on how far the bar is pulled (5 mm: 2.200
+G_F at an opening of 5 ε_0 Δx, 2.322 at 7). For classic SPH the test asks that the excess over
+2 G_F, an artefact of the layers next to the crack and the surface, shrinks as the spacing does
+and that the spacings agree (:data:`TOL_SPREAD`)."""
 TOL_SPREAD = {"csph": 0.01, "sph": 0.05}
 """The regularisation: the energy per crack area at the three spacings agrees within the part
 that is not the band's (the only part that may depend on the spacing): 1 % (csph), 5 % (sph).
@@ -120,7 +126,11 @@ def test_energy_per_crack_area_is_spacing_independent_with_eq5(ladder):
     method, out = ladder
     per_area = np.array([c["final_ratio"] * c["G_F"] for c in out[True]])
     GF = out[True][0]["G_F"]
-    assert per_area / (BAND * GF) == pytest.approx(np.ones(3), abs=TOL_BAND[method]), per_area / GF
+    if method == "csph":
+        assert per_area / (BAND * GF) == pytest.approx(np.ones(3), abs=TOL_BAND), per_area / GF
+    else:  # at least 2 G_F (the band), the excess shrinking with the spacing
+        excess = per_area / (BAND * GF) - 1
+        assert np.all(excess >= 0) and np.all(np.diff(excess) < 0), per_area / GF
     assert per_area.max() / per_area.min() - 1 <= TOL_SPREAD[method], per_area / GF
 
 
@@ -131,8 +141,11 @@ def test_energy_per_crack_area_scales_with_spacing_without_eq5(ladder):
     dx = np.array([c["spacing"] for c in out[False]])
     per_area = np.array([c["final_ratio"] * c["G_F"] for c in out[False]])
     GF5 = MortarBar().fracture_energy(PAPER_SPACING)
-    assert per_area / (BAND * GF5 * dx / PAPER_SPACING) == pytest.approx(
-        np.ones(3), abs=TOL_BAND[method]), per_area
+    ratio = per_area / (BAND * GF5 * dx / PAPER_SPACING)
+    if method == "csph":
+        assert ratio == pytest.approx(np.ones(3), abs=TOL_BAND), per_area
+    else:  # as with eq. 5: at least the band, the excess shrinking with the spacing
+        assert np.all(ratio >= 1) and np.all(np.diff(ratio) < 0), per_area
     scaled = per_area * PAPER_SPACING / dx
     assert scaled.max() / scaled.min() - 1 <= TOL_SPREAD[method], scaled
     assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=TOL_SPREAD[method])

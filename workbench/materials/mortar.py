@@ -11,14 +11,33 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   exactly ∫S:dE, the undamaged elastic law is the library's Saint Venant–Kirchhoff law (law 0), and
   its tangent is a short formula. At mortar strains (≤ 2·10⁻²) E differs from the Hencky strain by
   O(ε²) (< 1 %); large compressions, where SVK softens, are not the mortar's regime.
-* Damage (003 §3.2 steps (1)–(3), Fig. 9, eq. 6): principal elastic strains e_A, n_A of the
-  step's trial elastic strain by an eigen-analysis; along each tensile principal direction with e_A > ε_cr = f_t/E the damage
-  D_A = 1 − φ(e_A) (:func:`reduction_factor`); the damage is kept as a symmetric tensor Ω in the
-  reference frame (the paper's D^L "rotated to the global axes by direction cosines"),
-  and "the largest value reached is kept" along every current principal direction:
-  Ω ← Ω + max(0, D_A − n_A·Ω·n_A) n_A⊗n_A (:func:`update_damage`). The n_A are orthonormal, so
-  raising one direction leaves n_B·Ω·n_B of the others unchanged; for directions that do not rotate
-  this is exactly the per-direction maximum of the paper.
+* Damage (003 §3.2 steps (1)–(3), Fig. 9, eq. 6), on a fixed orthogonal crack frame: the damage
+  is a symmetric tensor Ω = Σ D_i m_i⊗m_i in the reference frame (the paper's D^L "rotated to the
+  global axes by direction cosines"). Its crack axes m_i (D_i > 0) are set when the point first
+  cracks and do not turn afterwards (:func:`crack_frame`): a virgin point takes the principal
+  directions of the step's trial elastic strain; with one crack the two other axes are the
+  principal directions of the strain in the plane normal to it; with two the third is fixed. Along
+  each axis the damage is raised from the normal strain κ_i = m_i·E_e·m_i when κ_i > ε_cr = f_t/E,
+  to D(κ_i) = 1 − φ(κ_i) (:func:`reduction_factor`, :func:`damage_value`), "the largest value
+  reached kept" (:func:`raise_damage`). Past ε_0 the stored value is κ/ε_0 ≥ 1 (φ = 0 either
+  way): it keeps two fully released axes apart, so that Ω's eigenbasis stays the crack frame.
+  The paper re-evaluates principal strains every step without saying how the kept maxima follow a
+  turning direction; raising Ω along turning principal directions (this law's first version) is
+  not dissipative (see "Dissipation"). With a fixed frame it is, and for a crack that does not
+  turn it is the same law.
+* Dissipation (tension-only growth, :func:`cap_release`): at a fixed strain the stored energy is
+  W = ½λ(Σφ̂_k e_k)² + μΣφ̂_k² e_k² + 2μΣ α_ij e_ij² in the crack frame (e_k = m_k·E_e·m_k,
+  φ̂_k = φ_k on an open axis, 1 on a closed one), a quadratic in the open factors with gradient
+  ∂W/∂φ_i = e_i b_i, b_i = (λ + 2μ)φ_i e_i + λΣ_k≠i φ̂_k e_k the normal stress σ'_ii over φ_i.
+  Lowering φ_i therefore raises W wherever the normal stress across the crack is compressive,
+  which eq. 6–8 allow (a tensile principal strain under strong lateral compression). So a crack
+  grows only while its normal stress stays tensile: φ_i is held, where needed, at b_i ≥ 0 at the
+  new factors of the trial strain (a crack does not grow under a compressive normal stress), and
+  at b_i ≥ 0 at the mean factors ½(φ_n + φ_n+1) of the step's midpoint strain, which makes the
+  step's released energy (below) exactly non-negative whenever the midpoint is the trial's
+  (elastic steps). A consequence: uniaxial compression cracks nothing laterally in an elastic
+  step (the lateral normal stress is zero, a crack there would release nothing); the paper's
+  strain criterion would crack it once |σ| > f_t/ν.
 * Reduction factors (eq. 6): φ_i = 1 − ω_i (clipped to [0, 1]) along the principal axes m_i of Ω
   (:func:`damage_frame`). 003 applies φ along the global x, y, z; here along the damage axes, which
   are the global axes whenever the cracks are, and which make the law objective and the same for a
@@ -56,8 +75,8 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   and the stress could never be "completely released" as §4.1 states. A fully released direction
   (φ = 0) thus still transfers a little shear, 2μ φ_min φ_j e'_ij, as the floor intends.
 * Fully released (for the kernel reduction of 003 §4.2(2), which belongs to the particle method):
-  history column :data:`H_RELEASED` is 1.0 once some principal strain has reached ε_0 or some
-  eigenvalue of Ω has reached 1 (a direction with φ = 0), else 0.0.
+  history column :data:`H_RELEASED` is 1.0 once some eigenvalue of Ω has reached 1 (a crack axis
+  with φ = 0), else 0.0.
 * Compression: associative Mises plasticity on S with linear isotropic hardening,
   σ_y = f_c + H ε̄_p, H = E/99 by default (uniaxial post-yield slope E H/(E + H) = E/100, Fig. 14).
   Return mapping (:func:`closest_point_return`): elastic trial S_tr = 𝒞:(E − E_p,n) with the
@@ -101,7 +120,7 @@ History layout (:data:`N_HISTORY` = 23 columns; the point routine copies any col
 col     meaning
 ======  ====================================================================================
 0–5     plastic Green–Lagrange strain E_p (xx, yy, zz, yz, xz, xy), reference frame
-6–11    damage tensor Ω (xx, yy, zz, yz, xz, xy), reference frame
+6–11    damage tensor Ω (xx, yy, zz, yz, xz, xy), reference frame (eigenvalues ≥ 1: κ/ε_0)
 12      equivalent plastic strain ε̄_p
 13      plastic work W_p, J/m³ (reference volume)
 14      released (cracking) energy W_r, J/m³ (reference volume)
@@ -140,6 +159,7 @@ _VI = (0, 1, 2, 1, 0, 0)
 _VJ = (0, 1, 2, 2, 2, 1)
 SQRT2 = math.sqrt(2.0)
 DAMAGE_RESOLUTION = 1e-13  # smaller raises are round-off of n·Ω·n (~1e-16), not damage
+OMEGA_CRACKED = 0.5 * DAMAGE_RESOLUTION  # an eigenvalue of Ω above this marks a crack axis
 
 
 # --------------------------------------------------------------------------------------------
@@ -222,38 +242,158 @@ def _max_eig_bound(e):
 
 
 @njit(**JIT)
-def update_damage(Ee, Om, eps_cr, eps_0, a, V):
-    """003 §3.2 steps (1)–(3) and eq. 6, in place on the damage tensor.
+def damage_value(kappa, eps_cr, eps_0):
+    """The damage along a crack axis whose normal strain has reached κ (eq. 6, φ = 1 − D):
+    1 − φ(κ) (:func:`reduction_factor`) below ε_0, and κ/ε_0 ≥ 1 from ε_0 on, where φ = 0. The
+    value beyond 1 changes nothing in the law (φ = max(0, 1 − D)); it keeps two fully released
+    axes apart, so that the crack frame stays the eigenbasis of Ω."""
+    if kappa >= eps_0:
+        return kappa / eps_0
+    return 1.0 - reduction_factor(kappa, eps_cr, eps_0)
 
-    Ee (3, 3): elastic Green–Lagrange strain; Om (3, 3): damage tensor Ω (reference frame),
-    raised along each principal direction n_A of Ee with e_A > ε_cr to D_A = 1 − φ(e_A) where
-    n_A·Ω·n_A is lower (by more than :data:`DAMAGE_RESOLUTION`):
-    Ω += (D_A − n_A·Ω·n_A) n_A⊗n_A. a, V (3, 3): scratch.
-    Returns (largest raise, reached): the largest D_A − n_A·Ω·n_A applied (0.0: Ω unchanged);
-    some e_A ≥ ε_0 (fully released direction)."""
+
+@njit(**JIT)
+def crack_frame(Om, cracked, Ee, a, Q, om):
+    """The fixed orthogonal crack frame of a step (module docstring, "Damage").
+
+    Om (3, 3) damage tensor (not modified), ``cracked``: whether it is non-zero; Ee (3, 3) the
+    trial elastic strain; a (3, 3) scratch. Out: Q (3, 3) the axes as columns, om (3,) the damage
+    along them, the crack axes (om > :data:`OMEGA_CRACKED`) first. The crack axes are the
+    eigenvectors of Ω and do not turn; the axes not yet cracked span the rest, and there they are
+    the principal directions of Ee's block (all three with no crack; a rotation in the plane
+    normal to a single crack; the remaining direction with two). Returns the number of crack axes."""
+    if cracked:
+        for i in range(3):
+            for j in range(3):
+                a[i, j] = Om[i, j]
+        eig_sym3(a, Q)
+        for i in range(3):
+            om[i] = a[i, i] if a[i, i] > OMEGA_CRACKED else 0.0
+    else:
+        for i in range(3):
+            om[i] = 0.0
+            for j in range(3):
+                Q[i, j] = 1.0 if i == j else 0.0
+    for i in range(2):  # sort the axes by decreasing damage (three elements)
+        for j in range(2 - i):
+            if om[j] < om[j + 1]:
+                t = om[j]
+                om[j] = om[j + 1]
+                om[j + 1] = t
+                for r in range(3):
+                    t = Q[r, j]
+                    Q[r, j] = Q[r, j + 1]
+                    Q[r, j + 1] = t
+    k = 0
     for i in range(3):
-        for j in range(3):
-            a[i, j] = Ee[i, j]
-    eig_sym3(a, V)
-    grew = 0.0
-    reached = False
+        if om[i] > 0.0:
+            k += 1
+    if k == 0:
+        for i in range(3):
+            for j in range(3):
+                a[i, j] = Ee[i, j]
+        eig_sym3(a, Q)
+    elif k == 1:
+        e11 = 0.0
+        e22 = 0.0
+        e12 = 0.0
+        for i in range(3):
+            for j in range(3):
+                e11 += Q[i, 1] * Ee[i, j] * Q[j, 1]
+                e22 += Q[i, 2] * Ee[i, j] * Q[j, 2]
+                e12 += Q[i, 1] * Ee[i, j] * Q[j, 2]
+        th = 0.5 * math.atan2(2.0 * e12, e11 - e22)
+        c = math.cos(th)
+        s = math.sin(th)
+        for r in range(3):
+            u = Q[r, 1]
+            v = Q[r, 2]
+            Q[r, 1] = c * u + s * v
+            Q[r, 2] = -s * u + c * v
+    return k
+
+
+@njit(**JIT)
+def normal_strains(Q, e, out):
+    """out[i] = m_i·e·m_i, the normal strains of e (3, 3) along the axes m_i (columns of Q)."""
     for A_ in range(3):
-        e = a[A_, A_]
-        if e > eps_cr:
-            if e >= eps_0:
-                reached = True
-            d = 1.0 - reduction_factor(e, eps_cr, eps_0)
-            cur = 0.0
-            for i in range(3):
-                for j in range(3):
-                    cur += V[i, A_] * Om[i, j] * V[j, A_]
-            if d > cur + DAMAGE_RESOLUTION:
-                inc = d - cur
-                for i in range(3):
-                    for j in range(3):
-                        Om[i, j] += inc * V[i, A_] * V[j, A_]
-                grew = max(grew, inc)
-    return grew, reached
+        s = 0.0
+        for i in range(3):
+            for j in range(3):
+                s += Q[i, A_] * e[i, j] * Q[j, A_]
+        out[A_] = s
+
+
+@njit(**JIT)
+def cap_release(e, phi_old, phi, lam, mu, midpoint):
+    """Tension-only growth (module docstring, "Dissipation"). The normal stress of eq. 8 on axis
+    i over its factor is b_i(φ) = (λ + 2μ)φ_i e_i + λ Σ_k≠i φ̂_k e_k (φ̂_k = φ_k open, 1 closed);
+    along every open axis (e_i > 0) whose factor drops in the step, φ_i is raised, if need be (never
+    above φ_i,old), until b_i ≥ 0 at the new factors, or, with ``midpoint``, at the mean factors
+    ½(φ_old + φ). The stored energy at fixed e is a quadratic in the open factors whose gradient
+    is e_i b_i, so W(φ) − W(φ_old) = Σ e_i b_i(½(φ_old + φ)) (φ_i − φ_i,old): either condition
+    makes it ≤ 0; the first also leaves no compressive normal stress on a growing crack. e (3,)
+    normal strains along the crack axes; phi_old, phi (3,), phi in place. Every axis is capped
+    from the factors before the pass (one simultaneous pass, so that axes in the same state get
+    the same cap): raising φ_k only raises every b_i, so afterwards all of them are ≥ 0."""
+    c = lam + 2.0 * mu
+    new0 = phi[0]
+    new1 = phi[1]
+    new2 = phi[2]
+    for i in range(3):
+        if e[i] > 0.0 and phi[i] < phi_old[i]:
+            r = 0.0
+            for k in range(3):
+                if k != i:
+                    f = 0.5 * (phi_old[k] + phi[k]) if midpoint else phi[k]
+                    r += (f if e[k] > 0.0 else 1.0) * e[k]
+            v = phi[i]
+            if midpoint:
+                if c * 0.5 * (phi_old[i] + phi[i]) * e[i] + lam * r < 0.0:
+                    v = min(phi_old[i], -2.0 * lam * r / (c * e[i]) - phi_old[i])
+            elif c * phi[i] * e[i] + lam * r < 0.0:
+                v = min(phi_old[i], -lam * r / (c * e[i]))
+            if i == 0:
+                new0 = v
+            elif i == 1:
+                new1 = v
+            else:
+                new2 = v
+    phi[0] = new0
+    phi[1] = new1
+    phi[2] = new2
+
+
+@njit(**JIT)
+def raise_damage(e_tr, e_mid, om_old, om, phi_old, phi, eps_cr, eps_0, lam, mu):
+    """003 §3.2 steps (1)–(3) and eq. 6 on the fixed crack frame (:func:`crack_frame`).
+
+    e_tr (3,) the trial elastic strain's normal strains along the axes; e_mid (3,) those of the
+    step's midpoint elastic strain ½(E_e,n + trial); om_old (3,) the damage along the axes. Out:
+    om (3,) the new damage: D(κ_i) (:func:`damage_value`) where κ_i = e_tr,i > ε_cr exceeds the old
+    value by more than :data:`DAMAGE_RESOLUTION` (the largest value kept), then capped by
+    :func:`cap_release` at e_tr and at e_mid; phi_old, phi (3,) the factors 1 − D clipped to
+    [0, 1]. Returns the largest raise (0.0: no growth)."""
+    for i in range(3):
+        om[i] = om_old[i]
+        phi_old[i] = min(1.0, max(0.0, 1.0 - om_old[i]))
+        if e_tr[i] > eps_cr:
+            d = damage_value(e_tr[i], eps_cr, eps_0)
+            if d > om_old[i] + DAMAGE_RESOLUTION:
+                om[i] = d
+        phi[i] = min(1.0, max(0.0, 1.0 - om[i]))
+    cap_release(e_tr, phi_old, phi, lam, mu, False)
+    cap_release(e_mid, phi_old, phi, lam, mu, True)
+    grew = 0.0
+    for i in range(3):
+        if phi[i] > min(1.0, max(0.0, 1.0 - om[i])):  # capped: the damage of the raised factor
+            om[i] = 1.0 - phi[i]
+        if om[i] > om_old[i] + DAMAGE_RESOLUTION:
+            grew = max(grew, om[i] - om_old[i])
+        else:
+            om[i] = om_old[i]
+            phi[i] = phi_old[i]
+    return grew
 
 
 @njit(**JIT)
@@ -721,7 +861,10 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     tmp = w[9]
     a = w[10]
     V = w[11]
-    Qo = w[12]     # axes of the old damage (released energy)
+    om_o = w[12, 0]         # damage along the crack axes, old
+    om = w[12, 1]           # and new
+    e_t = w[12, 2]          # normal strains along the axes: of the trial elastic strain
+    e_m = w[16, 2]          # and of the midpoint guess ½(E_e,n + trial)
     So = w[13]
     st = w[14].reshape(9)   # factors of eq. 7–8 (6 used)
     sto = w[15].reshape(9)
@@ -733,19 +876,29 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     _elastic_strain(F, h_old, Etr)
     _load_omega(h_old, Om)
 
-    # state of the step (explicit in the step): damage raised along the principal directions of
-    # the trial elastic strain (eq. 6, Fig. 9, the largest value kept), open/closed read from it
+    # state of the step (explicit in the step): damage raised along the fixed crack frame from
+    # the trial elastic strain (eq. 6, Fig. 9, the largest value kept; tension-only growth),
+    # open/closed read from the trial
     grew = False
-    reached = False
-    if _max_eig_bound(Etr) > eps_cr:
-        raise_, reached = update_damage(Etr, Om, eps_cr, eps0, a, V)
-        grew = raise_ > 0.0
-    damaged = damaged_n or grew
     wmax = 0.0
-    if damaged:
-        wmax = damage_frame(Om, a, Q, phi)
+    if damaged_n or _max_eig_bound(Etr) > eps_cr:
+        crack_frame(Om, damaged_n, Etr, a, Q, om_o)
+        for k in range(6):
+            v = 0.5 * (h_old[H_EE + k] + Etr[_VI[k], _VJ[k]])
+            Em[_VI[k], _VJ[k]] = v
+            Em[_VJ[k], _VI[k]] = v
+        normal_strains(Q, Etr, e_t)
+        normal_strains(Q, Em, e_m)
+        grew = raise_damage(e_t, e_m, om_o, om, phio, phi, eps_cr, eps0, lam, mu) > 0.0
+        if grew:
+            for i in range(3):
+                for j in range(3):
+                    Om[i, j] = (om[0] * Q[i, 0] * Q[j, 0] + om[1] * Q[i, 1] * Q[j, 1]
+                                + om[2] * Q[i, 2] * Q[j, 2])
+        wmax = max(om[0], max(om[1], om[2]))
     else:
         _identity_frame(Q, phi)
+    damaged = damaged_n or grew
     release_state(Q, phi, phi_min, Etr, st)
 
     # elastic trial (eq. 8), Mises check, closest-point return with the step's matrix
@@ -786,15 +939,9 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
         release_state(Q, phi, phi_min, Em, stm)
         degraded_stress(Em, Q, stm, lam, mu, tmp, So)
         W_new = 0.5 * _ddot(Em, So)
-        if damaged_n:
-            _load_omega(h_old, So)
-            damage_frame(So, a, Qo, phio)
-            release_state(Qo, phio, phi_min, Em, sto)
-            degraded_stress(Em, Qo, sto, lam, mu, tmp, So)
-            W_old = 0.5 * _ddot(Em, So)
-        else:
-            tr = Em[0, 0] + Em[1, 1] + Em[2, 2]
-            W_old = 0.5 * lam * tr * tr + mu * _ddot(Em, Em)
+        release_state(Q, phio, phi_min, Em, sto)  # the same frame: the crack axes do not turn
+        degraded_stress(Em, Q, sto, lam, mu, tmp, So)
+        W_old = 0.5 * _ddot(Em, So)
         W_r += W_old - W_new
 
     # P = F S
@@ -803,7 +950,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
             P[i, j] = F[i, 0] * S[0, j] + F[i, 1] * S[1, j] + F[i, 2] * S[2, j]
 
     # history
-    released = h_old[H_RELEASED] > 0.0 or reached or wmax >= 1.0
+    released = h_old[H_RELEASED] > 0.0 or wmax >= 1.0
     for k in range(6):
         h_new[H_EP + k] = h_old[H_EP + k] + dg * nf[_VI[k], _VJ[k]] if plastic else h_old[H_EP + k]
         h_new[H_OMEGA + k] = Om[_VI[k], _VJ[k]]
