@@ -39,7 +39,7 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   step (the lateral normal stress is zero, a crack there would release nothing); the paper's
   strain criterion would crack it once |σ| > f_t/ν.
 * Reduction factors (eq. 6): φ_i = 1 − ω_i (clipped to [0, 1]) along the principal axes m_i of Ω
-  (:func:`damage_frame`). 003 applies φ along the global x, y, z; here along the damage axes, which
+  (:func:`crack_frame`). 003 applies φ along the global x, y, z; here along the damage axes, which
   are the global axes whenever the cracks are, and which make the law objective and the same for a
   rotated path (the paper's diagonal-only D^G is not).
 * Release rates (eq. 7) and the degraded matrix (eq. 8, after Carol, Rizzi & Willam 2001), in the
@@ -242,6 +242,12 @@ def _max_eig_bound(e):
 
 
 @njit(**JIT)
+def factor(d):
+    """The reduction factor of a damage value: φ = 1 − D clipped to [0, 1] (eq. 6)."""
+    return min(1.0, max(0.0, 1.0 - d))
+
+
+@njit(**JIT)
 def damage_value(kappa, eps_cr, eps_0):
     """The damage along a crack axis whose normal strain has reached κ (eq. 6, φ = 1 − D):
     1 − φ(κ) (:func:`reduction_factor`) below ε_0, and κ/ε_0 ≥ 1 from ε_0 on, where φ = 0. The
@@ -262,6 +268,8 @@ def crack_frame(Om, cracked, Ee, a, Q, om):
     eigenvectors of Ω and do not turn; the axes not yet cracked span the rest, and there they are
     the principal directions of Ee's block (all three with no crack; a rotation in the plane
     normal to a single crack; the remaining direction with two). Returns the number of crack axes."""
+    for i in range(3):
+        om[i] = 0.0
     if cracked:
         for i in range(3):
             for j in range(3):
@@ -269,21 +277,16 @@ def crack_frame(Om, cracked, Ee, a, Q, om):
         eig_sym3(a, Q)
         for i in range(3):
             om[i] = a[i, i] if a[i, i] > OMEGA_CRACKED else 0.0
-    else:
-        for i in range(3):
-            om[i] = 0.0
-            for j in range(3):
-                Q[i, j] = 1.0 if i == j else 0.0
-    for i in range(2):  # sort the axes by decreasing damage (three elements)
-        for j in range(2 - i):
-            if om[j] < om[j + 1]:
-                t = om[j]
-                om[j] = om[j + 1]
-                om[j + 1] = t
-                for r in range(3):
-                    t = Q[r, j]
-                    Q[r, j] = Q[r, j + 1]
-                    Q[r, j + 1] = t
+        for i in range(2):  # sort the axes by decreasing damage (three elements)
+            for j in range(2 - i):
+                if om[j] < om[j + 1]:
+                    t = om[j]
+                    om[j] = om[j + 1]
+                    om[j + 1] = t
+                    for r in range(3):
+                        t = Q[r, j]
+                        Q[r, j] = Q[r, j + 1]
+                        Q[r, j + 1] = t
     k = 0
     for i in range(3):
         if om[i] > 0.0:
@@ -347,12 +350,12 @@ def cap_release(e, phi_old, phi, lam, mu, midpoint):
                 if k != i:
                     f = 0.5 * (phi_old[k] + phi[k]) if midpoint else phi[k]
                     r += (f if e[k] > 0.0 else 1.0) * e[k]
+            # b_i at the mean (midpoint) or new factor f_i; its root f* = −λr/((λ + 2μ)e_i)
+            f_i = 0.5 * (phi_old[i] + phi[i]) if midpoint else phi[i]
             v = phi[i]
-            if midpoint:
-                if c * 0.5 * (phi_old[i] + phi[i]) * e[i] + lam * r < 0.0:
-                    v = min(phi_old[i], -2.0 * lam * r / (c * e[i]) - phi_old[i])
-            elif c * phi[i] * e[i] + lam * r < 0.0:
-                v = min(phi_old[i], -lam * r / (c * e[i]))
+            if c * f_i * e[i] + lam * r < 0.0:
+                f_star = -lam * r / (c * e[i])
+                v = min(phi_old[i], 2.0 * f_star - phi_old[i] if midpoint else f_star)
             if i == 0:
                 new0 = v
             elif i == 1:
@@ -376,17 +379,17 @@ def raise_damage(e_tr, e_mid, om_old, om, phi_old, phi, eps_cr, eps_0, lam, mu):
     [0, 1]. Returns the largest raise (0.0: no growth)."""
     for i in range(3):
         om[i] = om_old[i]
-        phi_old[i] = min(1.0, max(0.0, 1.0 - om_old[i]))
+        phi_old[i] = factor(om_old[i])
         if e_tr[i] > eps_cr:
             d = damage_value(e_tr[i], eps_cr, eps_0)
             if d > om_old[i] + DAMAGE_RESOLUTION:
                 om[i] = d
-        phi[i] = min(1.0, max(0.0, 1.0 - om[i]))
+        phi[i] = factor(om[i])
     cap_release(e_tr, phi_old, phi, lam, mu, False)
     cap_release(e_mid, phi_old, phi, lam, mu, True)
     grew = 0.0
     for i in range(3):
-        if phi[i] > min(1.0, max(0.0, 1.0 - om[i])):  # capped: the damage of the raised factor
+        if phi[i] > factor(om[i]):  # capped: the damage of the raised factor
             om[i] = 1.0 - phi[i]
         if om[i] > om_old[i] + DAMAGE_RESOLUTION:
             grew = max(grew, om[i] - om_old[i])
@@ -394,24 +397,6 @@ def raise_damage(e_tr, e_mid, om_old, om, phi_old, phi, eps_cr, eps_0, lam, mu):
             om[i] = om_old[i]
             phi[i] = phi_old[i]
     return grew
-
-
-@njit(**JIT)
-def damage_frame(Om, a, Q, phi):
-    """Damage axes and reduction factors (003 eq. 6, φ = 1 − D, on the principal axes of Ω).
-
-    Om (3, 3) damage tensor (not modified); a (3, 3) scratch; Q (3, 3) out: the axes m_i as
-    columns; phi (3,) out: φ_i = 1 − ω_i clipped to [0, 1]. Returns the largest eigenvalue ω."""
-    for i in range(3):
-        for j in range(3):
-            a[i, j] = Om[i, j]
-    eig_sym3(a, Q)
-    wmax = -1.0
-    for i in range(3):
-        w = a[i, i]
-        wmax = max(wmax, w)
-        phi[i] = min(1.0, max(0.0, 1.0 - w))
-    return wmax
 
 
 @njit(**JIT)
@@ -751,6 +736,15 @@ def _load_omega(h, Om):
 
 
 @njit(**JIT)
+def _midpoint(h_old, E_end, Em):
+    """Em = ½(E_e,n + E_end): the step's midpoint elastic strain, E_e,n from the history."""
+    for k in range(6):
+        v = 0.5 * (h_old[H_EE + k] + E_end[_VI[k], _VJ[k]])
+        Em[_VI[k], _VJ[k]] = v
+        Em[_VJ[k], _VI[k]] = v
+
+
+@njit(**JIT)
 def _identity_frame(Q, phi):
     for i in range(3):
         phi[i] = 1.0
@@ -883,10 +877,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     wmax = 0.0
     if damaged_n or _max_eig_bound(Etr) > eps_cr:
         crack_frame(Om, damaged_n, Etr, a, Q, om_o)
-        for k in range(6):
-            v = 0.5 * (h_old[H_EE + k] + Etr[_VI[k], _VJ[k]])
-            Em[_VI[k], _VJ[k]] = v
-            Em[_VJ[k], _VI[k]] = v
+        _midpoint(h_old, Etr, Em)  # the guess: the trial as the step's end
         normal_strains(Q, Etr, e_t)
         normal_strains(Q, Em, e_m)
         grew = raise_damage(e_t, e_m, om_o, om, phio, phi, eps_cr, eps0, lam, mu) > 0.0
@@ -932,10 +923,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     W_p = h_old[H_W_PLASTIC] + (sy + 0.5 * H * dg) * dg
     W_r = h_old[H_W_RELEASED]
     if grew:  # midpoint rule: W(E_m; Ω_n) − W(E_m; Ω_n+1), E_m = ½(E_e,n + E_e,n+1)
-        for k in range(6):
-            v = 0.5 * (h_old[H_EE + k] + Ee[_VI[k], _VJ[k]])
-            Em[_VI[k], _VJ[k]] = v
-            Em[_VJ[k], _VI[k]] = v
+        _midpoint(h_old, Ee, Em)
         release_state(Q, phi, phi_min, Em, stm)
         degraded_stress(Em, Q, stm, lam, mu, tmp, So)
         W_new = 0.5 * _ddot(Em, So)
@@ -998,7 +986,10 @@ def mortar_energy(F, h, prm):
     _elastic_strain(F, h, Ee)
     if h[H_DAMAGE] > 0.0:
         _load_omega(h, Om)
-        damage_frame(Om, a, Q, phi)
+        om = w[7, 1]
+        crack_frame(Om, True, Ee, a, Q, om)
+        for i in range(3):
+            phi[i] = factor(om[i])
     else:
         _identity_frame(Q, phi)
     release_state(Q, phi, phi_min, Ee, st)
