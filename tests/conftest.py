@@ -1,18 +1,49 @@
 """Fixtures shared across test modules."""
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 
 import pytest
 
+VERIFY = pytest.StashKey[dict]()
+"""The session's `workbench verify --quick`: started when collection finds a test that needs it,
+so that it runs beside the tests that do not (the main job is a few minutes, mostly one core)."""
+
+
+def pytest_collection_modifyitems(session, config, items):
+    if any("quick_verify" in getattr(item, "fixturenames", ()) for item in items):
+        out = tempfile.mkdtemp(prefix="workbench-verify-")
+        env = dict(os.environ, WORKBENCH_CACHE=os.path.join(out, "cache"))
+        logs = [open(os.path.join(out, name), "w+") for name in ("stdout.txt", "stderr.txt")]
+        proc = subprocess.Popen([sys.executable, "-m", "workbench.app.cli", "verify", "--quick",
+                                 "--out", out], stdout=logs[0], stderr=logs[1], text=True, env=env)
+        config.stash[VERIFY] = dict(out=out, proc=proc, logs=logs)
+
+
+def pytest_unconfigure(config):
+    job = config.stash.get(VERIFY, None)
+    if job is not None:
+        if job["proc"].poll() is None:
+            job["proc"].kill()
+            job["proc"].wait()
+        for f in job["logs"]:
+            f.close()
+        shutil.rmtree(job["out"], ignore_errors=True)
+
 
 @pytest.fixture(scope="session")
-def quick_verify(tmp_path_factory):
+def quick_verify(pytestconfig):
     """`workbench verify --quick` run once per session (the main job, minutes): its output folder
     and the finished process. test_verify checks the job itself; other modules (e.g.
     test_stability_theory) assert on the datasets it wrote rather than recomputing them."""
-    out = tmp_path_factory.mktemp("verify")
-    env = dict(os.environ, WORKBENCH_CACHE=str(out / "cache"))
-    proc = subprocess.run([sys.executable, "-m", "workbench.app.cli", "verify", "--quick", "--out", str(out)],
-                          capture_output=True, text=True, env=env, timeout=900)
-    return out, proc
+    from pathlib import Path
+
+    job = pytestconfig.stash[VERIFY]
+    proc = job["proc"]
+    rc = proc.wait(timeout=900)
+    for f in job["logs"]:
+        f.seek(0)
+    stdout, stderr = (f.read() for f in job["logs"])
+    return Path(job["out"]), subprocess.CompletedProcess(proc.args, rc, stdout, stderr)
