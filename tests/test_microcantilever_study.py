@@ -121,6 +121,33 @@ def test_fem_ladder_converges_at_the_singular_order(fem_quick):
         assert np.all(np.isfinite(u)) and np.all(u < 0.1e-6)
 
 
+def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
+    """The 3-D run's ladder form (FEM_FULL_PATH_3D): meshes outside ``full`` solve the first,
+    elastic path point only. On the 2-D meshes: their slope and the limit are the full ladder's
+    (the same solve), the rest of their path NaN, and the csph window the finest full run's (the
+    last elastic point of H/h = 5's path). A 3-D dataset carries the ladder in N (not N/m) and
+    gate 1's FEM check."""
+    import dataclasses
+
+    from studies.microcantilever import FEM_MAX_ROOT, dataset, fem_ladder, gates, report_notes
+
+    part = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,))
+    np.testing.assert_allclose(part["slopes"], fem_quick["slopes"], rtol=1e-9)
+    assert part["slope_limit"] == pytest.approx(fem_quick["slope_limit"], rel=1e-9)
+    fine = part["runs"][10]
+    assert len(fine["load"]) == len(fem_quick["runs"][10]["load"])
+    assert np.isfinite(fine["load"][0]) and np.all(np.isnan(fine["load"][1:]))
+    coarse = fem_quick["runs"][5]
+    d_yield = coarse["deflection"][np.flatnonzero(coarse["eps_p_max"] == 0)[-1]]
+    assert part["window"] == pytest.approx((0.25 * d_yield, d_yield), rel=1e-12)
+    for case in ("inter", "intra"):
+        assert np.all(np.isnan(part["first_failure"][case][1]))
+    ds = dataset(dataclasses.replace(MicroCantilever(), dim=3), {}, ["compression"], [5], part)
+    assert ds.fem_load.attrs["units"] == "N" and ds.attrs["plane"] == "none (3-D)"
+    assert any("FEM H/h=10" in g.name for g in gates(ds))
+    assert "27-node hexahedra" in report_notes(ds)[0]
+
+
 def test_csph_elastic_slope_against_the_fem(fem_quick):
     """Gate 1 at H/Δx = 5 in 2-D: the csph slope over the FEM's elastic window, from the first
     0.4 µs of the quick run (the patch reaches 0.04 µm), within max(1 %, e(5)) of the FEM's
@@ -316,3 +343,18 @@ def test_deletion_summary_counts_the_deleted_elements_by_region():
     s = deletion_summary("intra", names, region, [2, 3, 6, 0])
     assert s["share_low"] == 0.25
     assert deletion_summary("intra", names, region, [])["n_deleted"] == 0
+
+
+def test_background_process_returns_and_ends():
+    """The 3-D run's FEM ladder runs in a spawned process beside the particle runs: its result
+    comes back, and closing it ends the process."""
+    import operator
+
+    from studies.microcantilever import _Background
+
+    job = _Background(operator.add, 2, 3)
+    try:
+        assert job.result() == 5
+    finally:
+        job.close()
+    assert all(not p.is_alive() for p in job.pool._pool)
