@@ -12,6 +12,7 @@ VERIFY = pytest.StashKey[dict]()
 so that it runs beside the tests that do not (the main job is a few minutes, mostly one core)."""
 
 
+@pytest.hookimpl(trylast=True)  # after -k / -m have deselected
 def pytest_collection_modifyitems(session, config, items):
     if any("quick_verify" in getattr(item, "fixturenames", ()) for item in items):
         out = tempfile.mkdtemp(prefix="workbench-verify-")
