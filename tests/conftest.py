@@ -4,6 +4,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -12,15 +13,20 @@ VERIFY = pytest.StashKey[dict]()
 so that it runs beside the tests that do not (the main job is a few minutes, mostly one core)."""
 
 
+def _start_verify(config) -> dict:
+    out = tempfile.mkdtemp(prefix="workbench-verify-")
+    env = dict(os.environ, WORKBENCH_CACHE=os.path.join(out, "cache"))
+    logs = [open(os.path.join(out, name), "w+") for name in ("stdout.txt", "stderr.txt")]
+    proc = subprocess.Popen([sys.executable, "-m", "workbench.app.cli", "verify", "--quick",
+                             "--out", out], stdout=logs[0], stderr=logs[1], text=True, env=env)
+    config.stash[VERIFY] = job = dict(out=out, proc=proc, logs=logs)
+    return job
+
+
 @pytest.hookimpl(trylast=True)  # after -k / -m have deselected
 def pytest_collection_modifyitems(session, config, items):
     if any("quick_verify" in getattr(item, "fixturenames", ()) for item in items):
-        out = tempfile.mkdtemp(prefix="workbench-verify-")
-        env = dict(os.environ, WORKBENCH_CACHE=os.path.join(out, "cache"))
-        logs = [open(os.path.join(out, name), "w+") for name in ("stdout.txt", "stderr.txt")]
-        proc = subprocess.Popen([sys.executable, "-m", "workbench.app.cli", "verify", "--quick",
-                                 "--out", out], stdout=logs[0], stderr=logs[1], text=True, env=env)
-        config.stash[VERIFY] = dict(out=out, proc=proc, logs=logs)
+        _start_verify(config)
 
 
 def pytest_unconfigure(config):
@@ -39,9 +45,7 @@ def quick_verify(pytestconfig):
     """`workbench verify --quick` run once per session (the main job, minutes): its output folder
     and the finished process. test_verify checks the job itself; other modules (e.g.
     test_stability_theory) assert on the datasets it wrote rather than recomputing them."""
-    from pathlib import Path
-
-    job = pytestconfig.stash[VERIFY]
+    job = pytestconfig.stash.get(VERIFY, None) or _start_verify(pytestconfig)
     proc = job["proc"]
     rc = proc.wait(timeout=900)
     for f in job["logs"]:
