@@ -138,11 +138,11 @@ def plane_images(X, planes, on, near=None):
     return np.concatenate(src), np.concatenate(sign), np.concatenate(offset)
 
 
-def with_images(a, src, sign=None, offset=None):
-    """``a`` (N, ...) followed by its rows ``src`` as seen in the mirrors: a scalar per row as it
-    is; a vector (n, d) as sign ⊙ a[src] + offset (a position; a velocity without offset); a
-    tensor (n, k, k) as R a[src] R with R = diag(sign) padded with ones to k (a plane-strain
-    σ_zz keeps its sign)."""
+def image_rows(a, src, sign=None, offset=None):
+    """The rows ``src`` of ``a`` (N, ...) as seen in the mirrors: a scalar per row as it is; a
+    vector (n, d) as sign ⊙ a[src] + offset (a position; a velocity without offset); a tensor
+    (n, k, k) as R a[src] R with R = diag(sign) padded with ones to k (a plane-strain σ_zz keeps
+    its sign)."""
     img = a[src]
     if sign is not None and a.ndim == 2:
         img = sign * img + (0.0 if offset is None else offset)
@@ -150,7 +150,12 @@ def with_images(a, src, sign=None, offset=None):
         s = np.ones((len(src), a.shape[1]))
         s[:, :sign.shape[1]] = sign
         img = s[:, :, None] * img * s[:, None, :]
-    return np.concatenate([a, img])
+    return img
+
+
+def with_images(a, src, sign=None, offset=None):
+    """``a`` (N, ...) followed by its :func:`image_rows`."""
+    return np.concatenate([a, image_rows(a, src, sign, offset)])
 
 
 def full_particles(ps, planes, tol: float) -> Images:

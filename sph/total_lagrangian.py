@@ -108,9 +108,9 @@ class Discretisation:
     def mirror_VP(self, VP) -> None:
         """The ghosts' rows of VP (n + n_ghost, d, d), in place: R (V P)_src R, R = diag(sign)."""
         if self.ghost_src is not None:
-            from .mirror import with_images
+            from .mirror import image_rows
 
-            VP[self.n:] = with_images(VP[:self.n], self.ghost_src, self.ghost_sign)[self.n:]
+            VP[self.n:] = image_rows(VP[:self.n], self.ghost_src, self.ghost_sign)
 
     @property
     def n(self) -> int:
