@@ -131,16 +131,46 @@ def mirror_planes(X: np.ndarray, planes, tol: float):
     return mask if mask.any() else None
 
 
+@njit(**JIT)
+def _near_other_body(x, body, rc):
+    """(N,) bool: within ``rc`` of another body's bounding box (every coordinate inside it
+    widened by ``rc``). ``body`` labels are non-negative ints; one pass for the boxes, one for
+    the test."""
+    N, d = x.shape
+    nb = 0
+    for a in range(N):
+        if body[a] < 0:
+            raise ValueError("body: labels must be >= 0")
+        nb = max(nb, body[a] + 1)
+    lo = np.full((nb, d), np.inf)
+    hi = np.full((nb, d), -np.inf)
+    for a in range(N):
+        b = body[a]
+        for i in range(d):
+            lo[b, i] = min(lo[b, i], x[a, i])
+            hi[b, i] = max(hi[b, i], x[a, i])
+    near = np.zeros(N, np.bool_)
+    for a in range(N):
+        for b in range(nb):
+            if b == body[a] or lo[b, 0] > hi[b, 0]:  # own body, or a label no particle has
+                continue
+            inside = True
+            for i in range(d):
+                if x[a, i] < lo[b, i] - rc or x[a, i] > hi[b, i] + rc:
+                    inside = False
+                    break
+            if inside:
+                near[a] = True
+                break
+    return near
+
+
 def candidates(x: np.ndarray, body: np.ndarray, rc: float):
     """Indices of the particles that can touch another body: those within ``rc`` of another
     body's bounding box (the pair search then runs on them only; a large body touched on a small
-    part of its surface costs that part). None when that is every particle."""
-    labels = np.unique(body)
-    near = np.zeros(len(x), bool)
-    for b in labels:
-        mb = body == b
-        lo, hi = x[mb].min(axis=0) - rc, x[mb].max(axis=0) + rc
-        near |= ~mb & np.all((x >= lo) & (x <= hi), axis=1)
+    part of its surface costs that part). None when that is every particle. ``x`` and ``body``
+    as :func:`contact_forces` passes them (float64 and int64, contiguous; labels ≥ 0)."""
+    near = _near_other_body(x, body, rc)
     if near.all():
         return None
-    return np.nonzero(near)[0]
+    return np.flatnonzero(near)

@@ -2,6 +2,8 @@
 a model cut by the planes against the mirrored whole (contact forces and energy exact)."""
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sph.contact import contact_forces, mirror_planes, pair_weight
 
@@ -120,3 +122,27 @@ def test_mirror_planes_bits_and_refusals():
     assert mirror_planes(X, [(2, 1.0, every)], 1e-9) is None
     with pytest.raises(ValueError, match="^planes"):
         contact_forces(X, np.array([0, 0, 1, 1]), 0.1, 1.0, np.zeros(3, np.int64))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), d=st.sampled_from([2, 3]), nb=st.integers(1, 4),
+       rc=st.floats(0.01, 0.5))
+def test_candidates_are_the_particles_near_another_bodys_box(seed, d, nb, rc):
+    """sph.contact.candidates against its definition written out with numpy: the particles within
+    rc of another body's bounding box; None when that is all of them. Labels may skip values."""
+    from sph.contact import candidates
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 60))
+    x = rng.uniform(0.0, 2.0, (n, d))
+    body = rng.choice(np.arange(0, 2 * nb, 2), n).astype(np.int64)
+    near = np.zeros(n, bool)
+    for b in np.unique(body):
+        mb = body == b
+        lo, hi = x[mb].min(axis=0) - rc, x[mb].max(axis=0) + rc
+        near |= ~mb & np.all((x >= lo) & (x <= hi), axis=1)
+    got = candidates(x, body, rc)
+    if near.all():
+        assert got is None
+    else:
+        np.testing.assert_array_equal(got, np.flatnonzero(near))
