@@ -202,6 +202,13 @@ TOL_FIRST_FAILURE = 0.03
 # released at failure depends on the plane-strain stress state). Before sph.crack closed the corner between touching failed cells, the staircase
 # crack at the root leaked and the intra runs at H/Δx = 10 and 20 kept a one-particle ligament
 # (7 % of the peak load to the end): 4.37, 4.45, 3.90 and inter 4.64, 4.43, 4.81 then.
+# At H/Δx = 15 (single runs, 110 s each on one thread): inter 4.28 (16 particles), intra 4.35
+# (18) µJ/m — so a ladder 10, 15, 20 spreads 8.2 % (inter) and 13.9 % (intra). Per interior crack
+# particle the band holds there too (W_p + W_rel = 0.265–0.27 µJ/m against V·g(ε_L,eff) = 0.273);
+# what differs is the count: a crack that steps to the next column overlaps it by a row or two
+# (intra 15: two rows doubled), a straight one does not (intra 20: one full column, 21). At 10 %
+# a particle is the whole tolerance up to H/Δx = 10; the crack band's energy is the band's volume,
+# and a staircase band is larger.
 TOL_BAND = 0.10
 
 

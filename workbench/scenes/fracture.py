@@ -8,7 +8,8 @@ inter-granular (ε_L = 0.002 on the grain boundaries) or intra-granular (in the 
 The paper gives no dimensions: our choices (parameters, ``--set`` changes them): a beam
 L × B × H = 20 × 5 × 5 µm on a block 5 µm long, 10 µm wide and 10 µm high (the beam's top flush
 with the block's), the block's back face and bottom face held; the load a downward velocity of the
-top-face patch 2–4 µm from the free end, 0.2 m/s, ramped up over 0.5 µs (about five periods
+top-face patch 2–4 µm from the free end (its ends on the lattice lines nearest to 0.8 L and 0.9 L:
+:meth:`MicroCantilever.patch_edges`), 0.2 m/s, ramped up over 0.5 µs (about five periods
 of the beam's first bending mode, ~0.1 µs: the kinetic energy stays below 1 % of the elastic
 energy before the first failure); 5 µs simulated (the first failure near 0.7–1 µs; the last
 ligament of the crack can take until about 4 µs to break at H/Δx = 10); grain boundaries 1 µm thick (``gb_thickness``: one particle spacing at resolution
@@ -37,6 +38,7 @@ stored, plastic work, released by failure).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -215,6 +217,23 @@ class MicroCantilever(Scene):
         inter = self.case == "inter"
         return [limited(g, not inter) for g in grains], limited(gb, inter)
 
+    def patch_edges(self, spacing: float) -> tuple[float, float]:
+        """The loading patch's ends along the beam, m, at ``spacing``: the lattice lines (node
+        lattice from the block's back face, x = −block + kΔx) nearest to 0.8 L and 0.9 L, a tie
+        outward. The patch moves rigidly, so it holds the beam's slope at zero between its end
+        particles and the load is stiffer the farther apart they are (2-D, first static point:
+        csph's slope 1.11e9 N/m² at H/Δx = 6 with the end particles 0.83 µm apart, inside
+        [0.8 L, 0.9 L], against the FEM's 1.66e9); the nearest lines keep that span within Δx of
+        the patch's 2 µm at every spacing. On the study's ladder (H/Δx = 5, 10, 20) 0.8 L and 0.9 L
+        are lattice lines already and nothing moves; the FEM's mesh, built on the same model, has
+        nodes on these lines."""
+        x0 = -self.block
+        qa = (0.8 * self.L - x0) / spacing
+        qb = (0.9 * self.L - x0) / spacing
+        ka = math.ceil(qa - 0.5 - 1e-9)
+        kb = math.floor(qb + 0.5 + 1e-9)
+        return x0 + ka * spacing, x0 + kb * spacing
+
     def model(self, spacing: float | None = None) -> m.Model:
         dx = self.H / 10 if spacing is None else spacing
         if not dx <= self.gb_thickness * (1 + 1e-9):
@@ -232,8 +251,8 @@ class MicroCantilever(Scene):
                              gb, priority=1) for k in range(self.n_grains - 1)]
         lo = self.block_box().lo
         big = 10 * (self.B + self.H)
-        patch = Plane(up, self.H / 2) & Box((0.8 * self.L,) + (-big,) * (d - 1),
-                                            (0.9 * self.L,) + (big,) * (d - 1))
+        a, b = self.patch_edges(dx)
+        patch = Plane(up, self.H / 2) & Box((a,) + (-big,) * (d - 1), (b,) + (big,) * (d - 1))
         v = m.Table((0.0, self.t_ramp), (0.0, -self.velocity))
         grain_names = tuple(f"grain{k}" for k in range(self.n_grains))
         gb_names = tuple(f"gb{k}{k + 1}" for k in range(self.n_grains - 1))
