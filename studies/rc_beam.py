@@ -68,7 +68,10 @@ cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
 RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
 """Particles across H = 100 mm: 12.5, 10 and 5 mm (the paper's). 20 mm (resolution 5) is not on
 the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within
-0.2 ms at any time-step factor (measured at 0.1 and 0.3)."""
+0.2 ms at any time-step factor (measured at 0.1 and 0.3). Cost at 5 mm over the 10 ms (a worker
+of ``--scheduler local`` beside the other, 2 cores): csph A 1111 s and B 648 s (39 624 steps);
+classic SPH on A, which stays stable there, about 80 min (step 21 000 after 43 min). The issue's
+15 minutes per specimen is not met with 5 mm on the ladder (issue 12, open)."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
