@@ -1167,7 +1167,7 @@ def report_notes(ds: xr.Dataset) -> list[str]:
     if "fem_elastic_slope" in ds:
         fr = [int(r) for r in ds.fem_resolution.values]
         f_unit = ds.fem_load.attrs.get("units", "N/m")
-        kind = ("plane strain, Q9" if f_unit == "N/m" else
+        kind = ("plane strain, Q9" if ds.attrs.get("plane", "strain") == "strain" else
                 "3-D, 27-node hexahedra, the finer mesh at its first, elastic path point only")
         notes.append(
             f"FEM reference ({kind}, J2 with Swift per grain and boundary, static): elastic "
