@@ -34,8 +34,10 @@ is not conserved exactly). About the reference configuration and without viscosi
 the gradient of the stored energy ½ Σ_i V_i ε_i : C_i : ε_i (ε_i = sym L_i of the displacements)
 where neighbouring particles have equal density: m_i m_j/ρ_i² = V_i V_j ρ_j/ρ_i, so a density
 contrast between materials makes the linearised scheme non-conservative at their interface.
-The compiled kernels are written for any d with 2-D specialisations of the pair loops (the
-plate's time loop).
+The pair loops are written out for d = 2 and d = 3 (the sums in registers). Step 2's list is
+searched within 2h plus a skin and searched again once a particle has moved half the skin
+(:meth:`Body._refresh_neighbours`): every step then sees the pairs of its own positions, as
+Fig. 6's search every step gives them (the listed pairs beyond 2h add exact zeros).
 """
 from __future__ import annotations
 
@@ -52,7 +54,7 @@ from .integrate import cfl_time_step, kick_drift, kick_row
 from .kernels import JIT, N_CHUNKS, SUPPORT, dw_dr, w as kernel_w
 from .method import ParticleBody
 from .mirror import on_planes, plane_images, with_images
-from .neighbours import drop_cross_body, neighbour_list
+from .neighbours import max_displacement, neighbour_list
 
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
 _NO_KF = np.ones(1)
@@ -128,21 +130,36 @@ def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce):
         L[1, 0] = L10
         L[1, 1] = L11
         return
+    # 3-D: the nine components in registers (the same sums, term by term, as a loop over k, l)
+    L00 = L01 = L02 = L10 = L11 = L12 = L20 = L21 = L22 = 0.0
+    xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+    vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
     for p in range(indptr[i], indptr[i + 1]):
         j = indices[p]
-        r2 = 0.0
-        for k in range(d):
-            r2 += (x[i, k] - x[j, k]) ** 2
-        r = math.sqrt(r2)
+        d0 = xi0 - x[j, 0]
+        d1 = xi1 - x[j, 1]
+        d2 = xi2 - x[j, 2]
+        r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if r <= 0.0:
             continue
-        g = dw_dr(r, h, 0, d) / r * m[j] / rho[j]
+        g = dw_dr(r, h, 0, 3) / r * m[j] / rho[j]
         if reduce:
             g *= min(kf[i], kf[j])
-        for k in range(d):
-            dvk = (v[j, k] - v[i, k]) * g
-            for l in range(d):
-                L[k, l] += dvk * (x[i, l] - x[j, l])
+        a0 = (v[j, 0] - vi0) * g
+        a1 = (v[j, 1] - vi1) * g
+        a2 = (v[j, 2] - vi2) * g
+        L00 += a0 * d0
+        L01 += a0 * d1
+        L02 += a0 * d2
+        L10 += a1 * d0
+        L11 += a1 * d1
+        L12 += a1 * d2
+        L20 += a2 * d0
+        L21 += a2 * d1
+        L22 += a2 * d2
+    L[0, 0], L[0, 1], L[0, 2] = L00, L01, L02
+    L[1, 0], L[1, 1], L[1, 2] = L10, L11, L12
+    L[2, 0], L[2, 1], L[2, 2] = L20, L21, L22
 
 
 @njit(inline="always", **JIT)
@@ -348,45 +365,64 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
 
 
 @njit(inline="always", **JIT)
-def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, out, kf,
+def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, kf,
               reduce):
-    """Eq. 1 for particle i, any d:
-    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij into out[i] (d,), m/s²; with
-    ``reduce`` each pair's kernel times min(kf_i, kf_j) (:func:`kernel_factors`)."""
-    d = x.shape[1]
-    for k in range(d):
-        out[i, k] = 0.0
+    """Eq. 1 for particle i in 3-D, returning (a_x, a_y, a_z), m/s²:
+    Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij; with ``reduce`` each pair's
+    kernel times min(kf_i, kf_j) (:func:`kernel_factors`). The sums are in registers, term by term
+    as a loop over the components would add them."""
+    ax = 0.0
+    ay = 0.0
+    az = 0.0
     ri2 = 1.0 / (rho[i] * rho[i])
+    s00, s01, s02 = sigma[i, 0, 0] * ri2, sigma[i, 0, 1] * ri2, sigma[i, 0, 2] * ri2
+    s10, s11, s12 = sigma[i, 1, 0] * ri2, sigma[i, 1, 1] * ri2, sigma[i, 1, 2] * ri2
+    s20, s21, s22 = sigma[i, 2, 0] * ri2, sigma[i, 2, 1] * ri2, sigma[i, 2, 2] * ri2
+    xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+    vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
     for p in range(indptr[i], indptr[i + 1]):
         j = indices[p]
-        r2 = 0.0
-        vr = 0.0
-        for k in range(d):
-            e = x[i, k] - x[j, k]
-            r2 += e * e
-            vr += (v[i, k] - v[j, k]) * e
+        d0 = xi0 - x[j, 0]
+        d1 = xi1 - x[j, 1]
+        d2 = xi2 - x[j, 2]
+        r2 = d0 * d0 + d1 * d1 + d2 * d2
+        vr = (vi0 - v[j, 0]) * d0 + (vi1 - v[j, 1]) * d1 + (vi2 - v[j, 2]) * d2
         r = math.sqrt(r2)
         if r <= 0.0:
             continue
-        g = m[j] * dw_dr(r, h, 0, d) / r
+        g = m[j] * dw_dr(r, h, 0, 3) / r
         if reduce:
             g *= min(kf[i], kf[j])
         rj2 = 1.0 / (rho[j] * rho[j])
-        f = (kernel_w(r, h, 0, d) / w_dx) ** n_as if n_as > 0 else 0.0
+        t00 = s00 + sigma[j, 0, 0] * rj2
+        t01 = s01 + sigma[j, 0, 1] * rj2
+        t02 = s02 + sigma[j, 0, 2] * rj2
+        t10 = s10 + sigma[j, 1, 0] * rj2
+        t11 = s11 + sigma[j, 1, 1] * rj2
+        t12 = s12 + sigma[j, 1, 2] * rj2
+        t20 = s20 + sigma[j, 2, 0] * rj2
+        t21 = s21 + sigma[j, 2, 1] * rj2
+        t22 = s22 + sigma[j, 2, 2] * rj2
+        if n_as > 0:
+            f = (kernel_w(r, h, 0, 3) / w_dx) ** n_as
+            t00 += f * (R[i, 0, 0] + R[j, 0, 0])
+            t01 += f * (R[i, 0, 1] + R[j, 0, 1])
+            t02 += f * (R[i, 0, 2] + R[j, 0, 2])
+            t10 += f * (R[i, 1, 0] + R[j, 1, 0])
+            t11 += f * (R[i, 1, 1] + R[j, 1, 1])
+            t12 += f * (R[i, 1, 2] + R[j, 1, 2])
+            t20 += f * (R[i, 2, 0] + R[j, 2, 0])
+            t21 += f * (R[i, 2, 1] + R[j, 2, 1])
+            t22 += f * (R[i, 2, 2] + R[j, 2, 2])
         pi_ij = 0.0
         if vr < 0.0 and (alpha > 0.0 or beta > 0.0):
             mu_ij = h * vr / (r2 + 0.01 * h * h)
             pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
                      / (0.5 * (rho[i] + rho[j])))
-        for k in range(d):
-            s = 0.0
-            for l in range(d):
-                t = sigma[i, k, l] * ri2 + sigma[j, k, l] * rj2
-                if n_as > 0:
-                    t += f * (R[i, k, l] + R[j, k, l])
-                s += t * (x[i, l] - x[j, l])
-            s -= pi_ij * (x[i, k] - x[j, k])
-            out[i, k] += g * s
+        ax += g * (t00 * d0 + t01 * d1 + t02 * d2 - pi_ij * d0)
+        ay += g * (t10 * d0 + t11 * d1 + t12 * d2 - pi_ij * d1)
+        az += g * (t20 * d0 + t21 * d1 + t22 * d2 - pi_ij * d2)
+    return ax, ay, az
 
 
 def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
@@ -416,10 +452,11 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
             acc[i, 0] = ax + a_ext[i, 0]
             acc[i, 1] = ay + a_ext[i, 1]
         else:
-            force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx,
-                      acc, kf, reduce)
-            for k in range(d):
-                acc[i, k] += a_ext[i, k]
+            ax, ay, az = force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
+                                   n_as, w_dx, kf, reduce)
+            acc[i, 0] = ax + a_ext[i, 0]
+            acc[i, 1] = ay + a_ext[i, 1]
+            acc[i, 2] = az + a_ext[i, 2]
         ok = True
         for k in range(d):
             ok = ok and math.isfinite(acc[i, k])
@@ -429,6 +466,19 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
         for i in prange(N):
             kick_row(i, v, acc, fixed, v_fix, dt, damping)
     return bad
+
+
+@njit(inline="always", **JIT)
+def _separation(x, v, i, j, d):
+    """(|x_ij|², v_ij · x_ij) of the pair (i, j), x_ij = x_i − x_j, written out for d = 2 and 3
+    (the same sums as a loop over the components)."""
+    e0 = x[i, 0] - x[j, 0]
+    e1 = x[i, 1] - x[j, 1]
+    if d == 2:
+        return e0 * e0 + e1 * e1, (v[i, 0] - v[j, 0]) * e0 + (v[i, 1] - v[j, 1]) * e1
+    e2 = x[i, 2] - x[j, 2]
+    return (e0 * e0 + e1 * e1 + e2 * e2,
+            (v[i, 0] - v[j, 0]) * e0 + (v[i, 1] - v[j, 1]) * e1 + (v[i, 2] - v[j, 2]) * e2)
 
 
 @njit(parallel=True, **JIT)
@@ -444,12 +494,7 @@ def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta, m_own):
         s = 0.0
         for p in range(indptr[i], indptr[i + 1]):
             j = indices[p]
-            r2 = 0.0
-            vr = 0.0
-            for k in range(d):
-                e = x[i, k] - x[j, k]
-                r2 += e * e
-                vr += (v[i, k] - v[j, k]) * e
+            r2, vr = _separation(x, v, i, j, d)
             r = math.sqrt(r2)
             if r <= 0.0 or vr >= 0.0:
                 continue
@@ -479,13 +524,16 @@ class Body:
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
                  artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
-                 viscous_work=False, kernel_reduction=False, mirrors=()):
+                 viscous_work=False, kernel_reduction=False, mirrors=(), skin=0.1):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
             raise ValueError(f"h_ratio: {h_ratio!r} is not allowed; h/Δx must lie in [0.5, 3]")
         if not (alpha >= 0 and beta >= 0):
             raise ValueError("alpha, beta: artificial-viscosity coefficients must be >= 0")
+        if not (isinstance(skin, (int, float)) and 0 <= skin <= 1):
+            raise ValueError(f"skin: {skin!r} is not allowed; the neighbour list's skin must lie in "
+                             "[0, 1] (× Δx; 0: rebuilt every step)")
         if not (0 <= artificial_stress <= 1):
             raise ValueError(f"artificial_stress: {artificial_stress!r} is not allowed; ε must lie "
                              "in [0, 1]")
@@ -554,6 +602,9 @@ class Body:
         self._on = on_planes(self.X, self.mirrors, 1e-6 * self.dx)
         self.m_full = self.m / 0.5 ** self._on.sum(axis=1)  # a plane particle's whole mass
         self._ghosts = None
+        self.skin = float(skin) * self.dx
+        self._x_listed = None  # positions at the last neighbour search
+        self.searches = 0  # neighbour searches so far
         self._accelerations(0.0, kick=False)
 
     @property
@@ -564,29 +615,42 @@ class Body:
     def dim(self) -> int:
         return self.X.shape[1]
 
-    def _neighbours(self, x):
-        """The shared cell list at the current positions; particles of different bodies
-        (``body`` labels) do not interact through the kernel (they meet through contact only).
-        With symmetry planes the ghosts of :meth:`_find_ghosts` are among the neighbours (their
-        indices ≥ N; the rows are the particles')."""
+    def _neighbours(self, x, reach):
+        """The shared cell list at the positions x within ``reach`` (m); particles of different
+        bodies (``body`` labels) do not interact through the kernel (they meet through contact
+        only). With symmetry planes the ghosts of :meth:`_find_ghosts` are among the neighbours
+        (their indices ≥ N; the rows are the particles')."""
         N = self.n
+        body = self.body
         if self.mirrors:
-            self._find_ghosts(x)
+            self._find_ghosts(x, reach)
             src = self._ghosts[0]
             x = np.concatenate([x, self._ghosts[1] * x[src] + self._ghosts[2]])
-        indptr, indices = neighbour_list(x, SUPPORT * self.h)
-        if self.body is not None:
-            body = self.body if not self.mirrors else np.concatenate([self.body, self.body[src]])
-            indptr, indices = drop_cross_body(indptr, indices, body)
+            if body is not None:
+                body = np.concatenate([body, body[src]])
+        indptr, indices = neighbour_list(x, reach, body)
         if self.mirrors:
             indptr, indices = indptr[:N + 1], indices[:indptr[N]]
         return indptr, indices
 
-    def _find_ghosts(self, x):
-        """Mirror images (:mod:`sph.mirror`) of the particles within the kernel support 2h of every
-        plane of a combination of the symmetry planes, at the current positions x (a plane
-        particle is its own image in its plane): (src, sign, offset) into ``_ghosts``."""
-        reach = SUPPORT * self.h
+    def _refresh_neighbours(self):
+        """Step 2: the neighbour list (``indptr``, ``indices``) of the current positions. It is
+        searched within 2h + ``skin`` and searched again only once a particle has moved more than
+        half the skin since: until then no pair outside the list can have come within 2h (each of
+        the two moved at most skin/2), and the listed pairs beyond 2h add exact zeros (the kernel
+        vanishes there), so every step sees the pairs of Fig. 6's search of its own positions
+        (``skin`` 0: searched every step)."""
+        if (self._x_listed is None or self.skin == 0.0
+                or max_displacement(self.x, self._x_listed) > 0.5 * self.skin):
+            self.indptr, self.indices = self._neighbours(self.x, SUPPORT * self.h + self.skin)
+            self._x_listed = self.x.copy()
+            self.searches += 1
+
+    def _find_ghosts(self, x, reach):
+        """Mirror images (:mod:`sph.mirror`) of the particles within ``reach`` (the kernel support
+        2h and the list's skin) of every plane of a combination of the symmetry planes, at the
+        positions x (a plane particle is its own image in its plane): (src, sign, offset) into
+        ``_ghosts``."""
         near = np.abs(x[:, [a for a, _ in self.mirrors]] - [at for _, at in self.mirrors]) <= reach
         self._ghosts = plane_images(x, self.mirrors, self._on, near)
         src = self._ghosts[0]  # what does not change within the step
@@ -611,7 +675,7 @@ class Body:
         return self.a_ext + self.extra_force(self) / self.m[:, None]
 
     def _accelerations(self, dt, kick):
-        self.indptr, self.indices = self._neighbours(self.x)
+        self._refresh_neighbours()
         if self.kf is not None:
             kernel_factors(self.table, self.mat_id, self.hist, self.kf)
         return self._force_pass(self._a_ext(), self.acc, dt, kick)
@@ -642,7 +706,7 @@ class Body:
         for s in range(n):
             f_old = self.acc.ravel()[fx] * m_fx if fx is not None else None
             kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
-            self.indptr, self.indices = self._neighbours(self.x)
+            self._refresh_neighbours()
             x, v, m, rho, _, _, _, kf = self._extended(self.x, self.v, self.rho, self.sigma,
                                                        self.R)
             rates_pass(x, v, m, rho, self.rho_new, self.sigma, self.F,
@@ -671,8 +735,8 @@ class Body:
     def forces(self) -> np.ndarray:
         """Particle forces m a (N, d) of the current state (no external load), N."""
         acc = np.zeros_like(self.acc)
-        indptr, indices = self._neighbours(self.x)
-        self._force_pass(np.zeros_like(self.acc), acc, 0.0, False, indptr, indices)
+        self._refresh_neighbours()
+        self._force_pass(np.zeros_like(self.acc), acc, 0.0, False)
         return acc * self.m[:, None]
 
     def energies(self) -> tuple[float, float]:
@@ -707,7 +771,10 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 
                kernel_reduction="003 4.2(2): kernels across fully released mortar particles x "
                                 "phi_min (default False; needs stress='hyperelastic')",
                mirror="'auto' (default: the scene's symmetry planes by mirror images rebuilt "
-                      "every step, sph.mirror) | 'none' (a one-sided stencil at a symmetry plane)")
+                      "every step, sph.mirror) | 'none' (a one-sided stencil at a symmetry plane)",
+               skin="the neighbour list's skin in [0, 1] x dx (default 0.1: searched again once a "
+                    "particle has moved skin/2, the same pairs as every step's search; 0: "
+                    "searched every step)")
 
 
 class Classic(ParticleBody):
@@ -720,7 +787,7 @@ class Classic(ParticleBody):
     def __init__(self, particles, h_ratio: float = 1.3, stress: str = "hypoelastic",
                  alpha: float = 1.0, beta: float = 1.0, artificial_stress: float = 0.0,
                  n_as: int = 4, viscous_work: bool = False, kernel_reduction: bool = False,
-                 mirror: str = "auto"):
+                 mirror: str = "auto", skin: float = 0.1):
         super().__init__(particles)
         ps = particles
         if mirror not in ("auto", "none"):
@@ -732,7 +799,7 @@ class Classic(ParticleBody):
                       artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
                       mat_id=ps.mat_id, viscous_work=viscous_work,
                       kernel_reduction=kernel_reduction,
-                      mirrors=ps.mirrors if mirror == "auto" else ())
+                      mirrors=ps.mirrors if mirror == "auto" else (), skin=skin)
         self.b.impulse = self.impulse
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc

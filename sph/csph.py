@@ -43,7 +43,7 @@ import numpy as np
 from .correction import correction_matrices, corrected_gradients, quadratic_gradients, reverse_gradients
 from .kernels import SUPPORT, kernel_code
 from .method import ParticleBody
-from .neighbours import drop_cross_body, neighbour_list
+from .neighbours import neighbour_list
 from . import total_lagrangian as tl
 
 NAME = "csph"
@@ -97,9 +97,7 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
     mass = m * V if m.ndim == 0 else np.ascontiguousarray(m)
     kind = kernel_code(kernel)
     h = h_ratio * dx
-    indptr, indices = neighbour_list(X, SUPPORT * h)
-    if body is not None:
-        indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+    indptr, indices = neighbour_list(X, SUPPORT * h, body)
     L, ok = correction_matrices(X, V, indptr, indices, h, kind)
     if correction == "quadratic":
         G, ok_q = quadratic_gradients(X, V, indptr, indices, h, kind)

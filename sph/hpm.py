@@ -80,7 +80,7 @@ from .diagnostics import strain_energy
 from .integrate import cfl_time_step, kick_drift_row, kick_row
 from .kernels import JIT, N_CHUNKS
 from .method import ParticleBody
-from .neighbours import drop_cross_body, neighbour_list
+from .neighbours import neighbour_list
 from .total_lagrangian import FASTMATH
 
 RE_RATIO = 2.1
@@ -553,9 +553,7 @@ def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisa
         raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
                          "(rows of the material table)")
     re = re_ratio * dx
-    indptr, indices = neighbour_list(X, re)
-    if body is not None:
-        indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+    indptr, indices = neighbour_list(X, re, body)
     nnz = len(indices)
     X_ij = np.empty((nnz, d))
     w = np.empty(nnz)

@@ -36,52 +36,52 @@ def _cell_coords(x, lo, cell, nc):
     return cid
 
 
+@njit(inline="always", **JIT)
+def _cell_range(cid, nc, k, d):
+    """The cell coordinate of linear cell ``cid`` along axis k (< d; 0 for k ≥ d) and the range
+    [lo, hi] of its neighbouring cells' coordinates along k, clipped to the grid."""
+    if k >= d:
+        return 0, 0, 0
+    rem = cid
+    for j in range(d - 1, k, -1):
+        rem //= nc[j]
+    c = rem % nc[k]
+    return c, max(c - 1, 0), min(c + 1, nc[k] - 1)
+
+
 @njit(parallel=True, **JIT)
-def _search(x, radius, lo, nc, order, cell_start, cid, count_only, indptr, indices):
+def _search(x, radius, nc, order, cell_start, cid, body, count_only, indptr, indices):
+    """Pass over the 3^d blocks of cells: with ``count_only`` the row lengths, else the rows into
+    ``indices`` at ``indptr``, each sorted ascending. ``body`` (N,) labels, or an empty array:
+    pairs of different labels are not neighbours."""
     N, d = x.shape
     r2max = radius * radius
-    n_off = 3 ** d
+    by_body = body.shape[0] == N
+    n1 = nc[1] if d > 1 else 1
+    n2 = nc[2] if d > 2 else 1
     counts = np.zeros(N, np.int64)
     for a in prange(N):
-        # cell coordinates of a from its linear cell id
-        rem = cid[a]
-        ca = np.empty(3, np.int64)
-        for k in range(d - 1, -1, -1):
-            ca[k] = rem % nc[k]
-            rem //= nc[k]
-        pos = 0
-        if not count_only:
-            pos = indptr[a]
+        _, l0, h0 = _cell_range(cid[a], nc, 0, d)
+        _, l1, h1 = _cell_range(cid[a], nc, 1, d)
+        _, l2, h2 = _cell_range(cid[a], nc, 2, d)
+        pos = 0 if count_only else indptr[a]
         n = 0
-        for o in range(n_off):
-            ok = True
-            # decode offset o into (−1, 0, 1)^d, most significant first
-            lin = 0
-            t = o
-            offs = np.empty(3, np.int64)
-            for k in range(d - 1, -1, -1):
-                offs[k] = t % 3 - 1
-                t //= 3
-            for k in range(d):
-                c = ca[k] + offs[k]
-                if c < 0 or c >= nc[k]:
-                    ok = False
-                    break
-                lin = lin * nc[k] + c
-            if not ok:
-                continue
-            for s in range(cell_start[lin], cell_start[lin + 1]):
-                b = order[s]
-                if b == a:
-                    continue
-                r2 = 0.0
-                for k in range(d):
-                    dx = x[b, k] - x[a, k]
-                    r2 += dx * dx
-                if r2 < r2max:
-                    if not count_only:
-                        indices[pos + n] = b
-                    n += 1
+        for c0 in range(l0, h0 + 1):
+            for c1 in range(l1, h1 + 1):
+                # the cells c2 = l2..h2 are consecutive in the linear order
+                first = (c0 * n1 + c1) * n2
+                for s in range(cell_start[first + l2], cell_start[first + h2 + 1]):
+                    b = order[s]
+                    if b == a or (by_body and body[b] != body[a]):
+                        continue
+                    r2 = 0.0
+                    for k in range(d):
+                        e = x[b, k] - x[a, k]
+                        r2 += e * e
+                    if r2 < r2max:
+                        if not count_only:
+                            indices[pos + n] = b
+                        n += 1
         counts[a] = n
         if not count_only:
             # insertion sort of the row: rows are short (tens of entries)
@@ -95,8 +95,10 @@ def _search(x, radius, lo, nc, order, cell_start, cid, count_only, indptr, indic
     return counts
 
 
-def neighbour_list(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """CSR neighbour list of the points ``x`` (N, d), d = 2 or 3, within ``radius`` (m).
+def neighbour_list(x: np.ndarray, radius: float, body=None) -> tuple[np.ndarray, np.ndarray]:
+    """CSR neighbour list of the points ``x`` (N, d), d = 1, 2 or 3, within ``radius`` (m);
+    ``body`` (N,) int labels or None: particles of different bodies are never neighbours (they
+    meet through contact only, :mod:`sph.contact`).
 
     Returns ``(indptr (N+1,) int64, indices (nnz,) int32)``; self excluded, rows sorted.
     """
@@ -106,6 +108,12 @@ def neighbour_list(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray
     if not radius > 0:
         raise ValueError(f"radius: {radius} is not allowed; must be > 0")
     N, d = x.shape
+    if body is None:
+        body = np.zeros(0, np.int64)
+    else:
+        body = np.ascontiguousarray(body, dtype=np.int64)
+        if body.shape != (N,):
+            raise ValueError(f"body: shape {body.shape} must be (N,) = ({N},)")
     if N == 0:
         return np.zeros(1, np.int64), np.zeros(0, np.int32)
     lo = x.min(axis=0) - 1e-12 * max(1.0, radius)
@@ -122,40 +130,46 @@ def neighbour_list(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray
     order = np.argsort(cid, kind="stable")
     ncell = int(np.prod(nc))
     cell_start = np.zeros(ncell + 1, np.int64)
-    np.add.at(cell_start, cid + 1, 1)
-    cell_start = np.cumsum(cell_start)
+    np.cumsum(np.bincount(cid, minlength=ncell), out=cell_start[1:])
     dummy_p = np.zeros(1, np.int64)
     dummy_i = np.zeros(1, np.int32)
-    counts = _search(x, radius, lo, nc, order, cell_start, cid, True, dummy_p, dummy_i)
+    counts = _search(x, radius, nc, order, cell_start, cid, body, True, dummy_p, dummy_i)
     indptr = np.zeros(N + 1, np.int64)
     np.cumsum(counts, out=indptr[1:])
     indices = np.empty(int(indptr[-1]), np.int32)
-    _search(x, radius, lo, nc, order, cell_start, cid, False, indptr, indices)
+    _search(x, radius, nc, order, cell_start, cid, body, False, indptr, indices)
     return indptr, indices
 
 
-def brute_force(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+@njit(parallel=True, **JIT)
+def max_displacement(x, x0):
+    """The largest distance |x_a − x0_a| over the points (N, d), m: how far a point has moved
+    since a neighbour list was built at x0 (a list searched within radius + skin holds every pair
+    within radius while this stays at most skin/2)."""
+    N, d = x.shape
+    out = 0.0
+    for a in prange(N):
+        r2 = 0.0
+        for k in range(d):
+            e = x[a, k] - x0[a, k]
+            r2 += e * e
+        out = max(out, r2)
+    return math.sqrt(out)
+
+
+def brute_force(x: np.ndarray, radius: float, body=None):
     """The same CSR list by an O(N²) search (tests only)."""
     x = np.asarray(x, dtype=np.float64)
     d2 = ((x[:, None, :] - x[None, :, :]) ** 2).sum(-1)
     mask = d2 < radius * radius
+    if body is not None:
+        mask &= np.equal.outer(body, body)
     np.fill_diagonal(mask, False)
     counts = mask.sum(1)
     indptr = np.zeros(len(x) + 1, np.int64)
     np.cumsum(counts, out=indptr[1:])
     indices = np.nonzero(mask)[1].astype(np.int32)
     return indptr, indices
-
-
-def drop_cross_body(indptr: np.ndarray, indices: np.ndarray, body: np.ndarray):
-    """The CSR list without the pairs whose particles belong to different bodies (``body`` (N,)
-    int labels): separate bodies never interact through the kernel, only through contact."""
-    N = len(indptr) - 1
-    rows = np.repeat(np.arange(N), np.diff(indptr))
-    keep = body[rows] == body[indices]
-    new_ptr = np.zeros_like(indptr)
-    np.cumsum(np.bincount(rows[keep], minlength=N), out=new_ptr[1:])
-    return new_ptr, np.ascontiguousarray(indices[keep])
 
 
 @njit(inline="always", **JIT)
@@ -189,9 +203,7 @@ def weighted_neighbourhood(X: np.ndarray, re: float, body=None):
     ``re`` (m) of X (N, d), none across the ``body`` (N,) labels, with X_ij = X_j − X_i (P, d) and
     the weight w = 1 − r²/r_e² (P,). Returns (indptr, indices, X_ij, w)."""
     X = np.ascontiguousarray(X, dtype=np.float64)
-    indptr, indices = neighbour_list(X, re)
-    if body is not None:
-        indptr, indices = drop_cross_body(indptr, indices, np.asarray(body))
+    indptr, indices = neighbour_list(X, re, body)
     rows = np.repeat(np.arange(len(X)), np.diff(indptr))
     X_ij = np.ascontiguousarray(X[indices] - X[rows])
     r2 = np.einsum("pk,pk->p", X_ij, X_ij)

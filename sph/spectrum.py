@@ -49,8 +49,12 @@ def _classic_force(body):
     from .classic import force_pass, rates_pass
 
     b = body.b
+    if b.mirrors:  # the rows would read ghosts (indices >= N) that x does not hold
+        raise ValueError("mirror: classic SPH's spectrum is not built with symmetry planes; "
+                         "allowed: mirror='none'")
     x = np.ascontiguousarray(b.x.copy())
-    ip, ix = b._neighbours(x)
+    b._refresh_neighbours()  # the body's list (its pairs beyond 2h add zeros)
+    ip, ix = b.indptr, b.indices
     N, d = x.shape
     zeros_v = np.zeros((N, d))
     a_ext = np.zeros((N, d))

@@ -43,3 +43,26 @@ def test_reverse_pairs_point_at_the_mirrored_pair():
     rev = reverse_pairs(ip, ix)
     a = np.repeat(np.arange(len(X)), np.diff(ip))
     assert np.array_equal(ix[rev], a) and np.array_equal(a[rev], ix)
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_body_labels_split_the_list(dim):
+    """With ``body`` labels, pairs of different bodies are not neighbours (brute force with the
+    same rule), and the rows stay sorted."""
+    rng = np.random.default_rng(10 + dim)
+    x = rng.random((500, dim))
+    body = rng.integers(0, 3, len(x))
+    p1, i1 = neighbour_list(x, 0.15, body)
+    p2, i2 = brute_force(x, 0.15, body)
+    assert np.array_equal(p1, p2) and np.array_equal(i1, i2)
+    with pytest.raises(ValueError, match="body"):
+        neighbour_list(x, 0.15, body[:-1])
+
+
+def test_max_displacement_is_the_largest_move():
+    from sph.neighbours import max_displacement
+
+    rng = np.random.default_rng(3)
+    x0 = rng.random((1000, 3))
+    x = x0 + 1e-3 * rng.standard_normal(x0.shape)
+    assert max_displacement(x, x0) == pytest.approx(np.linalg.norm(x - x0, axis=1).max(), rel=1e-15)
