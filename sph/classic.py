@@ -59,6 +59,8 @@ from .neighbours import max_displacement, neighbour_list
 STRESS_LAWS = ("hypoelastic", "hyperelastic")
 _NO_KF = np.ones(1)
 """The kernel factors passed when there is no kernel reduction (never read)."""
+_NO_AV = np.zeros((1, 1))
+"""The viscous accelerations' array passed when they are not tracked (never written)."""
 HYPOELASTIC_LAWS = ("svk", "neo_hooke")
 """Laws whose small-strain λ, μ the hypoelastic (Jaumann) path uses."""
 
@@ -320,9 +322,11 @@ def rates_kernel(x, v, m, rho, rho_new, sigma, F, indptr, indices, h, dt, lam, m
 @njit(inline="always", **JIT)
 def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, kf,
                   reduce):
-    """2-D specialisation of :func:`force_row`, returning (a_x, a_y)."""
+    """2-D specialisation of :func:`force_row`, returning (a_x, a_y, a^Π_x, a^Π_y)."""
     ax = 0.0
     ay = 0.0
+    px = 0.0
+    py = 0.0
     ri2 = 1.0 / (rho[i] * rho[i])
     si00 = sigma[i, 0, 0] * ri2
     si01 = sigma[i, 0, 1] * ri2
@@ -359,21 +363,27 @@ def _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
                      / (0.5 * (rho[i] + rho[j])))
             t00 -= pi_ij
             t11 -= pi_ij
+            px -= m[j] * pi_ij * gx
+            py -= m[j] * pi_ij * gy
         ax += m[j] * (t00 * gx + t01 * gy)
         ay += m[j] * (t10 * gx + t11 * gy)
-    return ax, ay
+    return ax, ay, px, py
 
 
 @njit(inline="always", **JIT)
 def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, kf,
               reduce):
-    """Eq. 1 for particle i in 3-D, returning (a_x, a_y, a_z), m/s²:
+    """Eq. 1 for particle i in 3-D, returning (a_x, a_y, a_z) and its viscous part
+    (a^Π_x, a^Π_y, a^Π_z) = −Σ_j m_j Π_ij ∇_i W_ij, m/s²:
     Σ_j m_j (σ_i/ρ_i² + σ_j/ρ_j² + f^n (R_i + R_j) − Π_ij I) ∇_i W_ij; with ``reduce`` each pair's
     kernel times min(kf_i, kf_j) (:func:`kernel_factors`). The sums are in registers, term by term
     as a loop over the components would add them."""
     ax = 0.0
     ay = 0.0
     az = 0.0
+    px = 0.0
+    py = 0.0
+    pz = 0.0
     ri2 = 1.0 / (rho[i] * rho[i])
     s00, s01, s02 = sigma[i, 0, 0] * ri2, sigma[i, 0, 1] * ri2, sigma[i, 0, 2] * ri2
     s10, s11, s12 = sigma[i, 1, 0] * ri2, sigma[i, 1, 1] * ri2, sigma[i, 1, 2] * ri2
@@ -422,24 +432,30 @@ def force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
         ax += g * (t00 * d0 + t01 * d1 + t02 * d2 - pi_ij * d0)
         ay += g * (t10 * d0 + t11 * d1 + t12 * d2 - pi_ij * d1)
         az += g * (t20 * d0 + t21 * d1 + t22 * d2 - pi_ij * d2)
-    return ax, ay, az
+        px -= g * pi_ij * d0
+        py -= g * pi_ij * d1
+        pz -= g * pi_ij * d2
+    return ax, ay, az, px, py, pz
 
 
 def force_pass(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
-               acc, fixed, v_fix, dt, damping, do_kick, kf=None):
-    """Step 4–5 (:func:`force_kernel`); ``kf`` (N,) or None as in :func:`rates_pass`. Returns the
-    number of non-finite accelerations."""
+               acc, fixed, v_fix, dt, damping, do_kick, kf=None, a_visc=None):
+    """Step 4–5 (:func:`force_kernel`); ``kf`` (N,) or None as in :func:`rates_pass`; ``a_visc``
+    (N, d) or None: where given, the viscous part of the accelerations, −Σ_j m_j Π_ij ∇_i W_ij,
+    m/s², is written there. Returns the number of non-finite accelerations."""
     reduce = kf is not None
+    track = a_visc is not None
     return force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx,
                         a_ext, acc, fixed, v_fix, dt, damping, do_kick,
-                        kf if reduce else _NO_KF, reduce)
+                        kf if reduce else _NO_KF, reduce, a_visc if track else _NO_AV, track)
 
 
 @njit(parallel=True, **JIT)
 def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_as, w_dx, a_ext,
-                 acc, fixed, v_fix, dt, damping, do_kick, kf, reduce):
+                 acc, fixed, v_fix, dt, damping, do_kick, kf, reduce, a_visc, track):
     """Accelerations (N, d) into ``acc`` (eq. 1 plus a_ext (N, d), m/s²; c (N,) the particles'
-    P-wave speeds, m/s) and, with ``do_kick``, the closing half kick (step 4–5). The kick is a
+    P-wave speeds, m/s), with ``track`` their viscous part into ``a_visc`` (N, d), and, with
+    ``do_kick``, the closing half kick (step 4–5). The kick is a
     separate loop: the viscosity reads the neighbours' velocities, which must not be kicked while
     they are read. Returns the number of non-finite accelerations. The rows are those of
     ``indptr``; the neighbours' arrays may also hold ghosts (:mod:`sph.mirror`)."""
@@ -447,16 +463,23 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
     bad = 0
     for i in prange(N):
         if d == 2:
-            ax, ay = _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
-                                   n_as, w_dx, kf, reduce)
+            ax, ay, px, py = _force_row_2d(i, x, v, m, rho, sigma, R, indptr, indices, h, c,
+                                           alpha, beta, n_as, w_dx, kf, reduce)
             acc[i, 0] = ax + a_ext[i, 0]
             acc[i, 1] = ay + a_ext[i, 1]
+            if track:
+                a_visc[i, 0] = px
+                a_visc[i, 1] = py
         else:
-            ax, ay, az = force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta,
-                                   n_as, w_dx, kf, reduce)
+            ax, ay, az, px, py, pz = force_row(i, x, v, m, rho, sigma, R, indptr, indices, h, c,
+                                               alpha, beta, n_as, w_dx, kf, reduce)
             acc[i, 0] = ax + a_ext[i, 0]
             acc[i, 1] = ay + a_ext[i, 1]
             acc[i, 2] = az + a_ext[i, 2]
+            if track:
+                a_visc[i, 0] = px
+                a_visc[i, 1] = py
+                a_visc[i, 2] = pz
         ok = True
         for k in range(d):
             ok = ok and math.isfinite(acc[i, k])
@@ -468,42 +491,17 @@ def force_kernel(x, v, m, rho, sigma, R, indptr, indices, h, c, alpha, beta, n_a
     return bad
 
 
-@njit(inline="always", **JIT)
-def _separation(x, v, i, j, d):
-    """(|x_ij|², v_ij · x_ij) of the pair (i, j), x_ij = x_i − x_j, written out for d = 2 and 3
-    (the same sums as a loop over the components)."""
-    e0 = x[i, 0] - x[j, 0]
-    e1 = x[i, 1] - x[j, 1]
-    if d == 2:
-        return e0 * e0 + e1 * e1, (v[i, 0] - v[j, 0]) * e0 + (v[i, 1] - v[j, 1]) * e1
-    e2 = x[i, 2] - x[j, 2]
-    return (e0 * e0 + e1 * e1 + e2 * e2,
-            (v[i, 0] - v[j, 0]) * e0 + (v[i, 1] - v[j, 1]) * e1 + (v[i, 2] - v[j, 2]) * e2)
-
-
-@njit(parallel=True, **JIT)
-def viscous_power(x, v, m, rho, indptr, indices, h, c, alpha, beta, m_own):
-    """Power of Monaghan's artificial viscosity (the Π_ij term of eq. 1), W (W/m in 2-D):
-    Σ_i m_i a^Π_i · v_i = −½ Σ_i Σ_j m_i m_j Π_ij (W'(r_ij)/r_ij) x_ij · v_ij ≤ 0 (the pair term is
-    antisymmetric; Π_ij > 0 only for approaching pairs, v_ij · x_ij < 0, and W' < 0). Its negative
-    times the step is the energy the viscosity dissipates in that step. m_i is ``m_own`` (N,): the
-    particles' own masses where ``m`` holds the full body's (symmetry planes, :mod:`sph.mirror`)."""
-    N, d = indptr.shape[0] - 1, x.shape[1]
-    total = 0.0
-    for i in prange(N):
-        s = 0.0
-        for p in range(indptr[i], indptr[i + 1]):
-            j = indices[p]
-            r2, vr = _separation(x, v, i, j, d)
-            r = math.sqrt(r2)
-            if r <= 0.0 or vr >= 0.0:
-                continue
-            mu_ij = h * vr / (r2 + 0.01 * h * h)
-            pi_ij = ((-alpha * 0.5 * (c[i] + c[j]) * mu_ij + beta * mu_ij * mu_ij)
-                     / (0.5 * (rho[i] + rho[j])))
-            s += m[j] * pi_ij * dw_dr(r, h, 0, d) / r * vr
-        total += -0.5 * m_own[i] * s
-    return total
+def viscous_step_work(m, a_old, a_new, v_n, v_half, v_new, dt):
+    """The work of the artificial viscosity's forces over one velocity-Verlet step, J (J/m in 2-D):
+    each half kick changes the velocity by Δt/2 times the acceleration, so a force's part of the
+    kinetic-energy change over it is Δt/2 · m a · (the mean of the velocities before and after):
+    Δt/2 Σ m_i [a^Π_n · (v_n + v_n+½)/2 + a^Π_n+1 · (v_n+½ + v_n+1)/2] with the viscous parts
+    a^Π = −Σ_j m_j Π_ij ∇_i W_ij of the force passes that made the two kicks. Without damping
+    or held DOFs the kinetic energy changes by exactly the sum of these works over all forces. It is
+    dissipative (Π_ij > 0 only for approaching pairs: Σ_i m_i a^Π_i · v_i ≤ 0 at the velocities Π
+    was evaluated with) up to the change of the velocities within a half kick."""
+    return 0.25 * dt * (float(np.einsum("i,ik,ik->", m, a_old, v_n + v_half))
+                        + float(np.einsum("i,ik,ik->", m, a_new, v_half + v_new)))
 
 
 # ================================================================================================
@@ -595,6 +593,9 @@ class Body:
         self.extra_force = None  # callable(body) -> (N, d) forces, e.g. contact between bodies
         self.track_viscous = bool(viscous_work) and (self.alpha > 0 or self.beta > 0)
         self.viscous_work = 0.0  # energy dissipated by the artificial viscosity so far, J
+        # the viscous part of the accelerations (the force pass's; swapped every step)
+        self.a_visc = np.zeros((N, d)) if self.track_viscous else None
+        self._a_visc_new = np.zeros((N, d)) if self.track_viscous else None
         self.impulse = None  # (N, d) or None: the impulse of the force on each fixed DOF is added
         self.body = None if body is None else np.asarray(body, dtype=np.int64)
         self.kf = np.ones(N) if kernel_reduction else None  # the kernel factors, or None: off
@@ -678,16 +679,16 @@ class Body:
         self._refresh_neighbours()
         if self.kf is not None:
             kernel_factors(self.table, self.mat_id, self.hist, self.kf)
-        return self._force_pass(self._a_ext(), self.acc, dt, kick)
+        return self._force_pass(self._a_ext(), self.acc, dt, kick, self.a_visc)
 
-    def _force_pass(self, a_ext, acc, dt, kick, indptr=None, indices=None):
+    def _force_pass(self, a_ext, acc, dt, kick, a_visc=None):
         """:func:`force_pass` at the current state, the ghosts of the symmetry planes included
-        (their velocities are a copy: the kick is carried back to the particles)."""
+        (their velocities are a copy: the kick is carried back to the particles); ``a_visc``
+        (N, d) or None: the viscous part of the accelerations into it."""
         x, v, m, rho, sigma, R, c, kf = self._extended(self.x, self.v, self.rho, self.sigma, self.R)
-        bad = force_pass(x, v, m, rho, sigma, R, self.indptr if indptr is None else indptr,
-                         self.indices if indices is None else indices, self.h, c, self.alpha,
+        bad = force_pass(x, v, m, rho, sigma, R, self.indptr, self.indices, self.h, c, self.alpha,
                          self.beta, self.n_as, self.w_dx, a_ext, acc, self.fixed, self.v_fix, dt,
-                         self.damping, kick, kf)
+                         self.damping, kick, kf, a_visc)
         if kick and v is not self.v:
             self.v[:] = v[:self.n]
         return bad
@@ -696,16 +697,19 @@ class Body:
         """``n`` steps of size dt; returns the steps completed (fewer if the state became
         non-finite or a material point failed). With ``impulse`` (N, d) set, the trapezoid impulse
         ½ (f_n + f_n+1) dt of the force on each fixed DOF is added to it; with ``viscous_work``,
-        the energy the artificial viscosity dissipates, −Δt × :func:`viscous_power` at the end of
-        each step (velocities v_n+1, positions x_n+1), is added to :attr:`viscous_work`."""
+        the energy the artificial viscosity dissipates, minus the work of its forces over the step
+        (:func:`viscous_step_work`), is added to :attr:`viscous_work`."""
         fx = np.flatnonzero(self.fixed.ravel()) if self.impulse is not None else None
         if fx is not None and fx.size == 0:
             fx = None
         if fx is not None:
             m_fx = self.m[fx // self.acc.shape[1]]
+        track = self.track_viscous
         for s in range(n):
             f_old = self.acc.ravel()[fx] * m_fx if fx is not None else None
+            v_n = self.v.copy() if track else None
             kick_drift(self.x, self.v, self.acc, self.fixed, self.v_fix, dt, self.damping)
+            v_h = self.v.copy() if track else None
             self._refresh_neighbours()
             x, v, m, rho, _, _, _, kf = self._extended(self.x, self.v, self.rho, self.sigma,
                                                        self.R)
@@ -718,14 +722,14 @@ class Body:
                 self.hist, self.hist_new = self.hist_new, self.hist
             if self.kf is not None:  # the particles released by this step's history
                 kernel_factors(self.table, self.mat_id, self.hist, self.kf)
-            bad = self._force_pass(self._a_ext(), self.acc, dt, True)
+            bad = self._force_pass(self._a_ext(), self.acc, dt, True,
+                                   self._a_visc_new if track else None)
             if fx is not None:
                 self.impulse.ravel()[fx] += 0.5 * dt * (f_old + self.acc.ravel()[fx] * m_fx)
-            if self.track_viscous:
-                x, v, m, rho, _, _, c, _ = self._extended(self.x, self.v, self.rho, self.sigma,
-                                                          self.R)
-                self.viscous_work -= dt * viscous_power(x, v, m, rho, self.indptr, self.indices,
-                                                        self.h, c, self.alpha, self.beta, self.m)
+            if track:
+                self.viscous_work -= viscous_step_work(self.m, self.a_visc, self._a_visc_new,
+                                                       v_n, v_h, self.v, dt)
+                self.a_visc, self._a_visc_new = self._a_visc_new, self.a_visc
             self.t += dt
             self.steps += 1
             if bad or self.status.any() or not np.isfinite(self.x).all():
@@ -766,8 +770,8 @@ NAME = "sph"
 OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 'hyperelastic'",
                alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
                artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)",
-               viscous_work="track the energy the artificial viscosity dissipates (default False: "
-                            "one more pair loop per step)",
+               viscous_work="track the energy the artificial viscosity dissipates, the work of "
+                            "its forces over each step (default False)",
                kernel_reduction="003 4.2(2): kernels across fully released mortar particles x "
                                 "phi_min (default False; needs stress='hyperelastic')",
                mirror="'auto' (default: the scene's symmetry planes by mirror images rebuilt "
