@@ -70,8 +70,13 @@ RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
 the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within
 0.2 ms at any time-step factor (measured at 0.1 and 0.3). Cost at 5 mm over the 10 ms (a worker
 of ``--scheduler local`` beside the other, 2 cores): csph A 1111 s and B 648 s (39 624 steps);
-classic SPH on A, which stays stable there, about 80 min (step 21 000 after 43 min). The issue's
-15 minutes per specimen is not met with 5 mm on the ladder (issue 12, open)."""
+classic SPH on A, which stays stable there, about 80 min at 4e7919a (123 ms per step: step 21 000
+after 43 min), 72 ms per step since its list has a skin and its pair loops were rewritten (the
+first 16 700 steps in 1202 s beside csph A at 5 mm; alone on one thread the bench's 42 ms), so
+about 48 min. The issue's 15 minutes per specimen is not met with 5 mm on the ladder (issue 12,
+open). The ladder keeps the paper's spacing: classic SPH is unstable from about 0.2 ms at 10 mm
+and at 8.33 mm on both specimens (measured on 654fa9e), so 5 mm is its one rung with a whole
+history and the paper's validation rows."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
