@@ -518,7 +518,9 @@ class Body:
     ``alpha``, ``beta`` (artificial viscosity), ``artificial_stress`` (ε of Gray et al., 0 = off),
     ``n_as`` (exponent, 4); ``damping`` mass-proportional, 1/s; ``kernel_reduction``: the kernel
     reduction of 003 §4.2(2) across fully released mortar particles (:func:`kernel_factors`;
-    needs ``stress='hyperelastic'``, the mortar's path)."""
+    needs ``stress='hyperelastic'``, the mortar's path); ``viscous_work``: the viscosity's
+    dissipation into :attr:`viscous_work` (:func:`viscous_step_work`); ``skin``: the neighbour
+    list's skin, × Δx (:meth:`_refresh_neighbours`; 0: searched every step)."""
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
                  artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
