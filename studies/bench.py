@@ -55,8 +55,13 @@ LATTICE = {"sph": "cell"}
 
 SCENES = ("plate", "microcantilever3d", "rc_beam")
 SCENE_SOLVERS = {"plate": ("csph", "hpm", "sph"), "microcantilever3d": ("csph",),
-                 "rc_beam": ("sph", "csph")}
-"""The methods benchmarked on each scene (those its study runs)."""
+                 "rc_beam": ("sph", "sph_every_step", "csph")}
+"""The methods benchmarked on each scene (those its study runs, and :data:`VARIANTS`)."""
+VARIANTS = {"sph_every_step": ("sph", dict(skin=0.0))}
+"""Benchmark-only variants: name -> (method, options over the study's). ``sph_every_step``:
+classic SPH with its neighbours searched every step (``skin`` 0), 003's Fig. 6 step as issue 12's
+benchmark names it; the study's ``sph`` searches again only once a particle has moved half its
+skin, with the same pairs in every step."""
 SCENE_PARTICLES = {"plate": (10_000, 100_000), "microcantilever3d": (100_000,),
                    "rc_beam": (15_000,)}
 """Default requested particles per scene: rc_beam's is the paper's 5 mm quarter model (specimen A,
@@ -96,7 +101,11 @@ def scene_of(name: str):
 
 def scene_options(name: str, solver: str) -> dict:
     """The method options the scene's study runs with (the micro-cantilever's 3-D csph options,
-    the rc_beam study's per-solver options); none for the plate."""
+    the rc_beam study's per-solver options); none for the plate. A variant
+    (:data:`VARIANTS`): its method's, with its own options over them."""
+    if solver in VARIANTS:
+        method, extra = VARIANTS[solver]
+        return {**scene_options(name, method), **extra}
     if name == "microcantilever3d" and solver == "csph":
         from .microcantilever import OPTIONS_3D
 
@@ -158,7 +167,7 @@ def scene_body(name: str, solver: str, n_particles: int, law: str | None = None,
         model = dataclasses.replace(model, regions=tuple(dataclasses.replace(r, material=TABLE1_STEEL)
                                                          for r in model.regions))
     ps = particles.discretise(model, res, LATTICE.get(solver) if name == "plate" else None)
-    mod, defaults = driver.method_entry(solver)
+    mod, defaults = driver.method_entry(VARIANTS.get(solver, (solver,))[0])
     body = mod.build(ps, **{**defaults, **scene_options(name, solver), **options})
     run = driver.Run(model, ps, body)
     drive = model.drive
@@ -183,8 +192,9 @@ def particle_steps_per_second(solver: str = "csph", n_particles: int = 100_000, 
 
     from sph import METHODS
 
-    if solver not in METHODS:
-        raise ValueError(f"solver: {solver!r} is not a particle method; allowed: {', '.join(METHODS)}")
+    if solver not in METHODS and solver not in VARIANTS:
+        raise ValueError(f"solver: {solver!r} is not a particle method; allowed: "
+                         f"{', '.join((*METHODS, *VARIANTS))}")
     if not (isinstance(threads, int) and 1 <= threads <= numba.config.NUMBA_NUM_THREADS):
         raise ValueError(f"threads: {threads!r} is not allowed; 1..{numba.config.NUMBA_NUM_THREADS}")
     numba.set_num_threads(threads)

@@ -98,3 +98,20 @@ def test_scene_harness_runs_the_scene(scene, solver):
     assert sb.body.x.shape[1] == 3 and (sb.extra is not None) == (scene == "rc_beam")  # contact
     with pytest.raises(ValueError, match="law"):
         bench.scene_body(scene, solver, 1000, law="j2")
+
+
+def test_every_step_variant_is_classic_sph_searching_every_step():
+    """``sph_every_step`` (issue 12's classic-SPH step with its neighbours rebuilt every step) is
+    the study's sph with ``skin`` 0: a search in every step, where the study's body searches
+    again only after a move of half its skin."""
+    from studies import bench
+
+    every = bench.scene_body("rc_beam", "sph_every_step", 1000)
+    study = bench.scene_body("rc_beam", "sph", 1000)
+    assert every.body.b.skin == 0.0 and study.body.b.skin > 0.0
+    searches = []
+    for sb in (every, study):
+        before = sb.body.b.searches
+        assert sb.body.advance(5, sb.dt, sb.f_ext, sb.fixed, sb.v_fix, sb.damping, sb.extra) == 5
+        searches.append(sb.body.b.searches - before)
+    assert searches[0] == 5 and searches[1] < 5
