@@ -38,15 +38,15 @@ def _cell_coords(x, lo, cell, nc):
 
 @njit(inline="always", **JIT)
 def _cell_range(cid, nc, k, d):
-    """The cell coordinate of linear cell ``cid`` along axis k (< d; 0 for k ≥ d) and the range
-    [lo, hi] of its neighbouring cells' coordinates along k, clipped to the grid."""
+    """The range [lo, hi] of the coordinates along axis k of the linear cell ``cid`` and its
+    neighbouring cells, clipped to the grid ([0, 0] for k ≥ d)."""
     if k >= d:
-        return 0, 0, 0
+        return 0, 0
     rem = cid
     for j in range(d - 1, k, -1):
         rem //= nc[j]
     c = rem % nc[k]
-    return c, max(c - 1, 0), min(c + 1, nc[k] - 1)
+    return max(c - 1, 0), min(c + 1, nc[k] - 1)
 
 
 @njit(parallel=True, **JIT)
@@ -61,9 +61,9 @@ def _search(x, radius, nc, order, cell_start, cid, body, count_only, indptr, ind
     n2 = nc[2] if d > 2 else 1
     counts = np.zeros(N, np.int64)
     for a in prange(N):
-        _, l0, h0 = _cell_range(cid[a], nc, 0, d)
-        _, l1, h1 = _cell_range(cid[a], nc, 1, d)
-        _, l2, h2 = _cell_range(cid[a], nc, 2, d)
+        l0, h0 = _cell_range(cid[a], nc, 0, d)
+        l1, h1 = _cell_range(cid[a], nc, 1, d)
+        l2, h2 = _cell_range(cid[a], nc, 2, d)
         pos = 0 if count_only else indptr[a]
         n = 0
         for c0 in range(l0, h0 + 1):
