@@ -4,8 +4,9 @@ Gray, Monaghan & Swift 2001), 2-D plane strain and 3-D, a material (a row of the
 uncorrected SPH fails.
 
 Eulerian kernel: the cubic spline of 003 eq. 4 (:mod:`sph.kernels`, support 2h, h = h_ratio·Δx, in
-d = 2 or 3 dimensions) evaluated at the *current* positions, with the neighbours rebuilt every step
-by the shared cell list (:func:`sph.neighbours.neighbour_list`). One step follows Fig. 6 of 003 in
+d = 2 or 3 dimensions) evaluated at the *current* positions, with the neighbours of every step's
+positions from the shared cell list (:func:`sph.neighbours.neighbour_list`; searched with a skin,
+below). One step follows Fig. 6 of 003 in
 kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-proportional damping):
 
 1. kick–drift: v ← v + Δt/2 a, x ← x + Δt v;
@@ -656,7 +657,7 @@ class Body:
         ``_ghosts``."""
         near = np.abs(x[:, [a for a, _ in self.mirrors]] - [at for _, at in self.mirrors]) <= reach
         self._ghosts = plane_images(x, self.mirrors, self._on, near)
-        src = self._ghosts[0]  # what does not change within the step
+        src = self._ghosts[0]  # what does not change until the next search
         self._ghost_m = with_images(self.m_full, src)
         self._ghost_c = with_images(self.c, src)
 
@@ -776,8 +777,8 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 
                             "its forces over each step (default False)",
                kernel_reduction="003 4.2(2): kernels across fully released mortar particles x "
                                 "phi_min (default False; needs stress='hyperelastic')",
-               mirror="'auto' (default: the scene's symmetry planes by mirror images rebuilt "
-                      "every step, sph.mirror) | 'none' (a one-sided stencil at a symmetry plane)",
+               mirror="'auto' (default: the scene's symmetry planes by mirror images found "
+                      "with the neighbours, sph.mirror) | 'none' (a one-sided stencil at a symmetry plane)",
                skin="the neighbour list's skin in [0, 1] x dx (default 0.1: searched again once a "
                     "particle has moved skin/2, the same pairs as every step's search; 0: "
                     "searched every step)")

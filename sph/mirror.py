@@ -31,9 +31,9 @@ tangent is the full stencil's, folded onto the real DOFs: K_q = Tᵀ K_ext T wit
 the real DOFs to the real and ghost ones (:func:`sph.total_lagrangian.tangent_matrix`).
 Energies, work and reactions of the quarter are the full body's divided by 2^P.
 
-Classic SPH (:mod:`sph.classic`) rebuilds its neighbours in the current configuration every step,
-so it rebuilds its ghosts with them (``Body._find_ghosts``): the particles within 2h of every plane
-of a combination, mirrored with their velocity, density and stress (σ_g = R σ_src R), the
+Classic SPH (:mod:`sph.classic`) searches its neighbours in the current configuration (with a
+skin, again once a particle has moved half of it), so it finds its ghosts with them
+(``Body._find_ghosts``): the particles within 2h and the skin of every plane of a combination, mirrored with their velocity, density and stress (σ_g = R σ_src R), the
 neighbour sums taking the full body's masses (a plane particle's whole mass). Its rates and
 accelerations are per particle, so they are the full body's without a share.
 

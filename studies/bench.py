@@ -12,8 +12,8 @@ alone — particles × steps / wall time. The scenes (:data:`SCENES`):
   :class:`workbench.scenes.MicroCantilever`, ``dim=3``), csph with the study's 3-D options;
 * ``rc_beam``: the reinforced mortar beam of paper 003 (:class:`workbench.scenes.RCBeam`, specimen
   A, quarter model: the mortar law, J2 bars, the weight and supports in contact), sph and csph with
-  the rc_beam study's options (classic SPH rebuilds its neighbours every step; with contact both
-  run the driver's generic step loop).
+  the rc_beam study's options (classic SPH's list with its skin; ``sph_every_step`` searching
+  every step, :data:`VARIANTS`; with contact both run the driver's generic step loop).
 
 Each measurement runs in a fresh subprocess (``python -m studies.bench``), so that its peak memory
 is its own.

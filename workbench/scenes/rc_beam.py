@@ -54,7 +54,7 @@ Our choices (all parameters below; ``workbench list`` shows them):
   builds the quarter's discretisation on the full body and keeps mirror images of the neighbours
   across the planes (:mod:`sph.mirror`), so the quarter moves as the full beam does, to
   round-off (tests/test_mirror.py: mid-span displacement over 0.5 ms at 20 mm 1e-8 of the peak
-  apart); classic SPH rebuilds its ghosts every step (1e-12 at 12.5 mm). With one-sided
+  apart); classic SPH finds its ghosts with its neighbours (1e-12 at 12.5 mm). With one-sided
   stencils (``mirror='none'``) csph is 11 % off at 20 mm (partly because the quarter's half
   width there is too narrow for the quadratic correction), 12 % at 12.5 mm, classic SPH 17 % at
   12.5 mm (specimen B, 0.5 ms);
