@@ -11,8 +11,8 @@ kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-propor
 
 1. kick–drift: v ← v + Δt/2 a, x ← x + Δt v;
 2. neighbours of the new positions (radius 2h);
-3. rates (:func:`rates_pass`): velocity gradient L_i = Σ_j V_j (v_j − v_i) ⊗ ∇_i W_ij (eq. 3,
-   V_j = m_j/ρ_j; :func:`velocity_gradient_row`), continuity ρ̇_i = −ρ_i tr L_i (eq. 2), and the
+3. rates (:func:`rates_pass`): velocity gradient L_i = Σ_j (m_j/ρ_i) (v_j − v_i) ⊗ ∇_i W_ij (eq. 3
+   with the volume m_j/ρ_i; :func:`velocity_gradient_row`), continuity ρ̇_i = −ρ_i tr L_i (eq. 2), and the
    stress update — ``stress="hypoelastic"`` (default): Hooke's law on the Jaumann rate with the
    small-strain λ_i, μ_i of particle i's material, σ̇ = λ tr(D) I + 2μ D + Ω σ − σ Ω (D, Ω the
    symmetric and skew parts of L; :func:`jaumann_update`; plane strain: L_zz = 0, σ_zz carried);
@@ -31,10 +31,16 @@ kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-propor
 
 Every pair term is antisymmetric (∇_i W_ij = −∇_j W_ji, the bracket symmetric), so linear momentum
 is conserved to round-off; the torque of the non-central stress term is not zero (angular momentum
-is not conserved exactly). About the reference configuration and without viscosity, eq. 1–3 are
-the gradient of the stored energy ½ Σ_i V_i ε_i : C_i : ε_i (ε_i = sym L_i of the displacements)
-where neighbouring particles have equal density: m_i m_j/ρ_i² = V_i V_j ρ_j/ρ_i, so a density
-contrast between materials makes the linearised scheme non-conservative at their interface.
+is not conserved exactly). Eq. 3 of 003 writes the derivative with the volumes m_j/ρ_j and leaves
+the velocity gradient's form open; we take the volume m_j/ρ_i (the gradient of the continuity
+equation ρ̇_i = Σ_j m_j (v_i − v_j)·∇_i W_ij), because that L is the power conjugate of eq. 1's
+forces for any densities: Σ_i m_i v_i·a_i = −Σ_i (m_i/ρ_i) σ_i : L_i (swap i and j in the σ_j
+half of each pair), so the internal forces do exactly the work that the stress path stores and
+the semi-discrete scheme conserves energy across a density jump (tests/test_classic.py). With
+m_j/ρ_j the two differ by the density contrast at a material interface: on the RC beam (steel
+plate 7850, bars 3580–11 200, mortar 2200 kg/m³) the forces then did work the stored energy did
+not see, and the beam under the plate grew unstable from about 0.2 ms (issue 12). Within one
+material the two forms differ by the density's variation only.
 The pair loops are written out for d = 2 and d = 3 (the sums in registers). Step 2's list is
 searched within 2h plus a skin and searched again once a particle has moved half the skin
 (:meth:`Body._refresh_neighbours`): every step then sees the pairs of its own positions, as
@@ -100,13 +106,15 @@ def kernel_factors(table: MaterialTable, mat_id: np.ndarray, hist: np.ndarray,
 
 @njit(inline="always", **JIT)
 def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce):
-    """Eq. 3: L_i = Σ_j V_j (v_j − v_i) ⊗ ∇_i W_ij (V_j = m_j/ρ_j, the cubic spline in d = 2 or 3)
-    into the 3×3 L (zero third row and column in 2-D), 1/s. With ``reduce``, each pair's kernel
+    """Eq. 3: L_i = Σ_j (m_j/ρ_i) (v_j − v_i) ⊗ ∇_i W_ij (the cubic spline in d = 2 or 3; the
+    volume m_j/ρ_i makes L the power conjugate of eq. 1's forces, module docstring) into the 3×3 L
+    (zero third row and column in 2-D), 1/s. With ``reduce``, each pair's kernel
     times min(kf_i, kf_j) (:func:`kernel_factors`, the kernel reduction of 003 §4.2(2))."""
     d = x.shape[1]
     for k in range(3):
         for l in range(3):
             L[k, l] = 0.0
+    inv_rho = 1.0 / rho[i]
     if d == 2:
         L00 = 0.0
         L01 = 0.0
@@ -119,7 +127,7 @@ def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce):
             r = math.sqrt(dx0 * dx0 + dx1 * dx1)
             if r <= 0.0:
                 continue
-            g = dw_dr(r, h, 0, 2) / r * m[j] / rho[j]
+            g = dw_dr(r, h, 0, 2) / r * m[j] * inv_rho
             if reduce:
                 g *= min(kf[i], kf[j])
             dv0 = v[j, 0] - v[i, 0]
@@ -145,7 +153,7 @@ def velocity_gradient_row(i, x, v, m, rho, indptr, indices, h, L, kf, reduce):
         r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if r <= 0.0:
             continue
-        g = dw_dr(r, h, 0, 3) / r * m[j] / rho[j]
+        g = dw_dr(r, h, 0, 3) / r * m[j] * inv_rho
         if reduce:
             g *= min(kf[i], kf[j])
         a0 = (v[j, 0] - vi0) * g

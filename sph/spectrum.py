@@ -31,7 +31,8 @@ K is applied matrix-free (:func:`stiffness_operator`):
 
 λ_max of the mass-scaled operator M^{-1/2} K M^{-1/2} is found by Lanczos iterations
 (:func:`scipy.sparse.linalg.eigsh`, ARPACK) — or Arnoldi (``eigs``) if the operator turns out
-non-symmetric (classic SPH with unequal densities).
+non-symmetric (classic SPH's K is symmetric at any densities: its velocity gradient is the power
+conjugate of its forces, :mod:`sph.classic`; it was not while that gradient took m_j/ρ_j).
 """
 from __future__ import annotations
 

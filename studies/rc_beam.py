@@ -52,31 +52,30 @@ NAME = "rc_beam"
 SCENE = RCBeam
 SOLVERS = ("sph", "csph")
 SPECIMENS = ("A", "B")
-OPTIONS = {"sph": dict(stress="hyperelastic", viscous_work=True, mirror="none"),
+OPTIONS = {"sph": dict(stress="hyperelastic", viscous_work=True),
            "csph": dict(integration="nodal")}
 """Solver options: sph needs the hyperelastic stress path for the mortar and J2 steel, and tracks
-its artificial viscosity's dissipation for the energy balance. sph keeps one-sided stencils at the
-symmetry planes (``mirror='none'``): with mirror images its quarter is the full beam (to 1e-12,
-tests/test_mirror.py), and classic SPH on the full beam at 12.5 mm is unstable — a mortar particle
-under the plate's edge (x = 25, y = 12.5, z = 87.5 mm on specimen B) accelerates exponentially from
-about 0.2 ms, the energy balance +19 % at 0.5 ms — where the one-sided quarter is not within the
-quick window (+1.1 %); its results are then the one-sided quarter's, 17 % off the full beam's
-mid-span displacement at 0.5 ms (issue 12, open). csph runs with nodal integration
-(the integration-consistent correction is stable only below 0.20 Δx/c_p on specimen A at 12.5 mm,
-its critical step 2/ω_max: at 0.9 of it, ``dt_reference='spectrum'``, it runs, at about 4 times the
-cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
-RESOLUTIONS = {"sph": (8, 10, 20), "csph": (8, 10, 20)}
-"""Particles across H = 100 mm: 12.5, 10 and 5 mm (the paper's). 20 mm (resolution 5) is not on
-the ladder: the section is then 6 x 2 particles and classic SPH's energy grows without bound within
-0.2 ms at any time-step factor (measured at 0.1 and 0.3). Cost at 5 mm over the 10 ms (a worker
-of ``--scheduler local`` beside the other, 2 cores): csph A 1111 s and B 648 s (39 624 steps);
-classic SPH on A, which stays stable there, about 80 min at 4e7919a (123 ms per step: step 21 000
-after 43 min), 72 ms per step since its list has a skin and its pair loops were rewritten (the
-first 16 700 steps in 1202 s beside csph A at 5 mm; alone on one thread the bench's 42 ms), so
-about 48 min. The issue's 15 minutes per specimen is not met with 5 mm on the ladder (issue 12,
-open). The ladder keeps the paper's spacing: classic SPH is unstable from about 0.2 ms at 10 mm
-and at 8.33 mm on both specimens (measured on 654fa9e), so 5 mm is its one rung with a whole
-history and the paper's validation rows."""
+its artificial viscosity's dissipation for the energy balance. Both methods keep mirror images
+of the neighbours across the symmetry planes (the default ``mirror='auto'``, :mod:`sph.mirror`),
+so the quarter moves as the full beam (tests/test_mirror.py). Classic SPH's velocity gradient has
+the volume m_j/ρ_i, the power conjugate of its forces (:mod:`sph.classic`): with m_j/ρ_j, as
+until 853cdd8, the full beam turned unstable under the plate from about 0.2 ms (B, 12.5 mm:
+energy balance +19 % at 0.5 ms) and the study ran the one-sided quarter (``mirror='none'``, 17 %
+off the full beam's mid-span displacement at 0.5 ms), which failed the energy balance over the
+10 ms (A 20 %, B 12.8 % at 12.5 mm) and was unstable at 10 and 8.33 mm. csph runs with nodal
+integration (the integration-consistent correction is stable only below 0.20 Δx/c_p on specimen
+A at 12.5 mm, its critical step 2/ω_max: at 0.9 of it, ``dt_reference='spectrum'``, it runs, at
+about 4 times the cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
+RESOLUTIONS = {"sph": (5, 8, 10, 12), "csph": (5, 8, 10, 12)}
+"""Particles across H = 100 mm: 20, 12.5, 10 and 8.33 mm, so that each specimen's runs finish
+within the issue's 15 minutes on 2 cores. Measured from an empty run cache on 2 cores: the whole
+default run (both specimens at the four spacings with both methods, the kernel-reduction runs on
+B, the modal check and the slow impact) in 20 min 35 s with ``--scheduler local``; with the
+default serial scheduler (one thread a run under 20 000 particles) specimen A's runs at 12.5, 10
+and 8.33 mm took 758 s (sph 87, 132, 279 s; csph 51, 68, 141 s), B's 421 s, and 20 mm adds
+about 25 s to both. The paper's 5 mm is
+``--resolution 20`` (classic SPH on A there: about 72 ms a step beside csph A at 5 mm, 40 000
+steps; csph A 1111 s and B 648 s), not on the default ladder."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
@@ -111,15 +110,14 @@ MODAL_SOLVERS = ("csph", "fem")
 # (~1 N s of 55 N s: 2e-2).
 TOL_MOMENTUM = 1e-8
 # Energy (gate 3b): the issue's bound, 2 % of the weight's initial kinetic energy, max over time.
-# csph closes it to ~2e-4 (velocity Verlet's error; its force is −∂Π/∂x). Classic SPH does not
-# close it in longer runs, and no term is missing: its error is independent of the time step
-# (specimen B, 12.5 mm, 0.5 ms: +1.13 % at dt_factor 0.3 and at 0.1) and follows the density
-# contrast (+0.30 % with the steel's density set to the mortar's, +0.16 % with every material the
-# mortar): eq. 3's velocity gradient with V_j = m_j/ρ_j is not the power conjugate of eq. 1's
-# m_j (σ_i/ρ_i² + σ_j/ρ_j²) across a density jump (plate 7850, bars 3580, mortar 2200 kg/m³;
-# sph/classic.py docstring), so the internal forces do work the stored energy does not see.
-# Over the whole 10 ms the step does matter (B, 12.5 mm: 12.8 % at dt_factor 0.3, 20.2 % at 0.6,
-# 730 % at 0.9), so a larger step is not a free saving for classic SPH.
+# csph closes it to ~2e-4 (velocity Verlet's error; its force is −∂Π/∂x). Classic SPH's forces do
+# the work its stress path stores (its velocity gradient is their power conjugate at any density,
+# sph/classic.py), so what is left is the time integration's and the contact's error: 0.03–0.4 %
+# over the 10 ms with images at 20, 12.5, 10 and 8.33 mm (A 0.38, 0.30, 0.21, 0.11 %; B 0.12,
+# 0.031, 0.085, 0.23 %). With the volume m_j/ρ_j in its velocity gradient
+# the forces did work the stored energy did not see across the steel–mortar density jumps (B,
+# 12.5 mm, one-sided quarter: +1.13 % at 0.5 ms at dt_factor 0.3 and 0.1 alike, 12.8 % over the
+# 10 ms), which this tolerance caught.
 TOL_ENERGY = 0.02
 # First flexural frequency (gate 2): the issue's bound, 2 %. The two discretisations of one
 # continuum at 12.5 mm: the FEM's quadratic hexahedra are converged to about 0.1 % here; csph's

@@ -140,11 +140,11 @@ def test_folded_tangent_is_the_derivative_of_the_force():
 
 
 def test_classic_sph_quarter_moves_as_the_full_beam():
-    """Classic SPH (neighbours rebuilt every step, so its ghosts are too: the particles within 2h
-    of the planes, mirrored with their velocity, stress and the full body's masses): specimen A
-    at 20 mm over the first 60 µs of the impact (the 20 mm classic run turns unstable at 73 µs, in
-    the full beam as in the quarter). Mid-span displacement and energies: the full beam's to
-    TOL_SAME_BODY; with one-sided stencils (mirror='none') the early wave is far off."""
+    """Classic SPH (its ghosts found at every search of its neighbour list: the particles within
+    2h and the skin of the planes, mirrored with their velocity, stress and the full body's
+    masses): specimen A at 20 mm over the first 60 µs of the impact (the first contact pulse).
+    Mid-span displacement and energies: the full beam's to TOL_SAME_BODY; with one-sided stencils
+    (mirror='none') the early wave is far off."""
     out = {}
     for key, sym, opts in (("quarter", True, {}), ("one-sided", True, {"mirror": "none"}),
                            ("full", False, {})):

@@ -56,7 +56,7 @@ Our choices (all parameters below; ``workbench list`` shows them):
   round-off (tests/test_mirror.py: mid-span displacement over 0.5 ms at 20 mm 1e-8 of the peak
   apart); classic SPH finds its ghosts with its neighbours (1e-12 at 12.5 mm). With one-sided
   stencils (``mirror='none'``) csph is 11 % off at 20 mm (partly because the quarter's half
-  width there is too narrow for the quadratic correction), 12 % at 12.5 mm, classic SPH 17 % at
+  width there is too narrow for the quadratic correction), 12 % at 12.5 mm, classic SPH 24 % at
   12.5 mm (specimen B, 0.5 ms);
 * ``velocity`` defaults to None, the specimen's speed; a given speed must lie in (0, 50] m/s;
 * ``structure='beam'``: the beam with its rebar alone (no plate, weight, support blocks or
