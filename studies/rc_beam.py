@@ -74,8 +74,8 @@ B, the modal check and the slow impact) in 20 min 35 s with ``--scheduler local`
 default serial scheduler (one thread a run under 20 000 particles) specimen A's runs at 12.5, 10
 and 8.33 mm took 758 s (sph 87, 132, 279 s; csph 51, 68, 141 s), B's 421 s, and 20 mm adds
 about 25 s to both. The paper's 5 mm is
-``--resolution 20`` (classic SPH on A there: about 72 ms a step beside csph A at 5 mm, 40 000
-steps; csph A 1111 s and B 648 s), not on the default ladder."""
+``--resolution 20`` (classic SPH on A there, one-sided before 615287a: about 72 ms a step beside
+csph A at 5 mm, 40 000 steps; csph A 1111 s and B 648 s), not on the default ladder."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
