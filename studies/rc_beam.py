@@ -1139,7 +1139,7 @@ def crack_band_notes(ds: xr.Dataset) -> list[str]:
                 st = str(ds.status.sel(**sel).values)
                 if st != "ok":  # not run, or stopped early: no end state to compare
                     if st != "not run":
-                        stopped.append(f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:g} mm "
+                        stopped.append(f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm "
                                        f"stopped ({st})")
                     continue
                 rows.append((float(ds.spacing.sel(resolution=r)),
@@ -1153,7 +1153,7 @@ def crack_band_notes(ds: xr.Dataset) -> list[str]:
                     notes.append(f"{sp}, {s}, energy released per crack area: {'; '.join(stopped)}.")
                 continue
             rows.sort(reverse=True)  # coarse to fine
-            text = "; ".join(f"dx = {dx * 1e3:g} mm: {e:.3g} G_F ({a:.4g} J/m^2; mortar fully "
+            text = "; ".join(f"dx = {dx * 1e3:.3g} mm: {e:.3g} G_F ({a:.4g} J/m^2; mortar fully "
                              f"released {100 * c:.2g} %, holding {100 * f:.2g} % of the released "
                              f"energy), largest displacement {w * 1e3:.4g} mm"
                              for dx, e, a, w, c, f in rows)
@@ -1217,7 +1217,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
                 y = ds.midspan_displacement.sel(solver=s, specimen=sp, resolution=r)
                 if np.isfinite(y).any():
                     ax.plot(ds.time * 1e3, y * 1e3, ls=styles.get(str(s), "-"), lw=1,
-                            label=f"{s}, dx = {float(ds.spacing.sel(resolution=r)) * 1e3:g} mm")
+                            label=f"{s}, dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm")
         if str(sp) in PAPER:
             p = PAPER[str(sp)]
             ax.axhline(p["max_displacement"] * 1e3, color="k", ls=":", lw=1,
