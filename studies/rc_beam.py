@@ -1209,15 +1209,20 @@ def plot(ds: xr.Dataset, outdir) -> list:
     outdir = Path(outdir)
     figs = []
     specimens = _specimens_run(ds)
-    fig, axes = plt.subplots(1, len(specimens), figsize=(6 * len(specimens), 4.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(specimens), figsize=(8 * len(specimens), 4.2), squeeze=False)
     styles = {"sph": "--", "csph": "-"}
     for ax, sp in zip(axes[0], specimens):
-        for s in ds.solver.values:
-            for r in ds.resolution.values:
-                y = ds.midspan_displacement.sel(solver=s, specimen=sp, resolution=r)
+        curves = [(str(s), ds.midspan_displacement.sel(solver=s, specimen=sp), styles.get(str(s), "-"))
+                  for s in ds.solver.values]
+        if "kr_midspan_displacement" in ds and str(sp) == KERNEL_REDUCTION_SPECIMEN:
+            curves.append(("sph + kernel reduction", ds.kr_midspan_displacement.sel(kernel_reduction=1),
+                           "-."))
+        for what, ys, ls in curves:  # colour: the spacing; line style: the method
+            for k, r in enumerate(ds.resolution.values):
+                y = ys.sel(resolution=r)
                 if np.isfinite(y).any():
-                    ax.plot(ds.time * 1e3, y * 1e3, ls=styles.get(str(s), "-"), lw=1,
-                            label=f"{s}, dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm")
+                    ax.plot(ds.time * 1e3, y * 1e3, ls=ls, lw=1, color=f"C{k}",
+                            label=f"{what}, dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm")
         if str(sp) in PAPER:
             p = PAPER[str(sp)]
             ax.axhline(p["max_displacement"] * 1e3, color="k", ls=":", lw=1,
@@ -1228,7 +1233,8 @@ def plot(ds: xr.Dataset, outdir) -> list:
         ax.set_ylabel("mid-span displacement [mm]")
         ax.set_title(f"specimen {sp}")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    fig.tight_layout()
     figs.append(save(fig, outdir / f"{NAME}_displacement.png"))
     # energies of the finest run
     r = ds.resolution.values[-1]
