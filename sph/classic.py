@@ -11,11 +11,12 @@ kick–drift–kick form (shared :mod:`sph.integrate` rows, optional mass-propor
 
 1. kick–drift: v ← v + Δt/2 a, x ← x + Δt v;
 2. neighbours of the new positions (radius 2h);
-3. rates (:func:`rates_pass`): velocity gradient L_i = Σ_j (m_j/ρ_i) (v_j − v_i) ⊗ ∇_i W_ij (eq. 3
-   with the volume m_j/ρ_i; :func:`velocity_gradient_row`), continuity ρ̇_i = −ρ_i tr L_i (eq. 2), and the
-   stress update — ``stress="hypoelastic"`` (default): Hooke's law on the Jaumann rate with the
-   small-strain λ_i, μ_i of particle i's material, σ̇ = λ tr(D) I + 2μ D + Ω σ − σ Ω (D, Ω the
-   symmetric and skew parts of L; :func:`jaumann_update`; plane strain: L_zz = 0, σ_zz carried);
+3. rates (:func:`rates_pass`): velocity gradient L_i = Σ_j (m_j/ρ_i) (v_j − v_i) ⊗ ∇_i W_ij
+   (eq. 3 with the volume m_j/ρ_i; :func:`velocity_gradient_row`), continuity
+   ρ̇_i = −ρ_i tr L_i (eq. 2), and the stress update — ``stress="hypoelastic"`` (default):
+   Hooke's law on the Jaumann rate with the small-strain λ_i, μ_i of particle i's material,
+   σ̇ = λ tr(D) I + 2μ D + Ω σ − σ Ω (D, Ω the symmetric and skew parts of L;
+   :func:`jaumann_update`; plane strain: L_zz = 0, σ_zz carried);
    ``stress="hyperelastic"``: Ḟ = L F (F ← (I + Δt L) F) and σ = P Fᵀ/J from the shared material
    library, row ``prm[mat_id[i]]`` (so that the ring's Mooney–Rivlin law of eq. 12 is the same code
    as in HPM and CSPH); the J2 law of the library works through the same path;

@@ -73,9 +73,9 @@ default run (both specimens at the four spacings with both methods, the kernel-r
 B, the modal check and the slow impact) in 20 min 35 s with ``--scheduler local``; with the
 default serial scheduler (one thread a run under 20 000 particles) specimen A's runs at 12.5, 10
 and 8.33 mm took 758 s (sph 87, 132, 279 s; csph 51, 68, 141 s), B's 421 s, and 20 mm adds
-about 25 s to both. The paper's 5 mm is
-``--resolution 20`` (classic SPH on A there, one-sided before 615287a: about 72 ms a step beside
-csph A at 5 mm, 40 000 steps; csph A 1111 s and B 648 s), not on the default ladder."""
+about 25 s to both. The paper's 5 mm is ``--resolution 20`` (classic SPH on A there, one-sided
+before 615287a: about 72 ms a step beside csph A at 5 mm, 40 000 steps; csph A 1111 s and B
+648 s), not on the default ladder."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
@@ -114,10 +114,10 @@ TOL_MOMENTUM = 1e-8
 # the work its stress path stores (its velocity gradient is their power conjugate at any density,
 # sph/classic.py), so what is left is the time integration's and the contact's error: 0.03–0.4 %
 # over the 10 ms with images at 20, 12.5, 10 and 8.33 mm (A 0.38, 0.30, 0.21, 0.11 %; B 0.12,
-# 0.031, 0.085, 0.23 %). With the volume m_j/ρ_j in its velocity gradient
-# the forces did work the stored energy did not see across the steel–mortar density jumps (B,
-# 12.5 mm, one-sided quarter: +1.13 % at 0.5 ms at dt_factor 0.3 and 0.1 alike, 12.8 % over the
-# 10 ms), which this tolerance caught.
+# 0.031, 0.085, 0.23 %). With the volume m_j/ρ_j in its velocity gradient the forces did work the
+# stored energy did not see across the steel–mortar density jumps (B, 12.5 mm, one-sided quarter:
+# +1.13 % at 0.5 ms at dt_factor 0.3 and 0.1 alike, 12.8 % over the 10 ms), which this tolerance
+# caught.
 TOL_ENERGY = 0.02
 # First flexural frequency (gate 2): the issue's bound, 2 %. The two discretisations of one
 # continuum at 12.5 mm: the FEM's quadratic hexahedra are converged to about 0.1 % here; csph's
@@ -1139,8 +1139,7 @@ def crack_band_notes(ds: xr.Dataset) -> list[str]:
                 st = str(ds.status.sel(**sel).values)
                 if st != "ok":  # not run, or stopped early: no end state to compare
                     if st != "not run":
-                        stopped.append(f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm "
-                                       f"stopped ({st})")
+                        stopped.append(f"{_dx_label(ds, r)} stopped ({st})")
                     continue
                 rows.append((float(ds.spacing.sel(resolution=r)),
                              float(ds.released_per_crack_area_over_GF.sel(**sel)),
@@ -1197,6 +1196,11 @@ def slow_note(ds: xr.Dataset) -> str:
             f"damage {v['max_damage']:.2g}, plastic strain {v['max_plastic_strain']:.2g}.")
 
 
+def _dx_label(ds: xr.Dataset, r) -> str:
+    """'dx = 8.33 mm': the spacing of resolution ``r``, three significant digits."""
+    return f"dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm"
+
+
 def plot(ds: xr.Dataset, outdir) -> list:
     import matplotlib
 
@@ -1212,17 +1216,17 @@ def plot(ds: xr.Dataset, outdir) -> list:
     fig, axes = plt.subplots(1, len(specimens), figsize=(8 * len(specimens), 4.2), squeeze=False)
     styles = {"sph": "--", "csph": "-"}
     for ax, sp in zip(axes[0], specimens):
-        curves = [(str(s), ds.midspan_displacement.sel(solver=s, specimen=sp), styles.get(str(s), "-"))
-                  for s in ds.solver.values]
+        curves = [(str(s), ds.midspan_displacement.sel(solver=s, specimen=sp),
+                   styles.get(str(s), "-")) for s in ds.solver.values]
         if "kr_midspan_displacement" in ds and str(sp) == KERNEL_REDUCTION_SPECIMEN:
-            curves.append(("sph + kernel reduction", ds.kr_midspan_displacement.sel(kernel_reduction=1),
-                           "-."))
+            curves.append(("sph + kernel reduction",
+                           ds.kr_midspan_displacement.sel(kernel_reduction=1), "-."))
         for what, ys, ls in curves:  # colour: the spacing; line style: the method
             for k, r in enumerate(ds.resolution.values):
                 y = ys.sel(resolution=r)
                 if np.isfinite(y).any():
                     ax.plot(ds.time * 1e3, y * 1e3, ls=ls, lw=1, color=f"C{k}",
-                            label=f"{what}, dx = {float(ds.spacing.sel(resolution=r)) * 1e3:.3g} mm")
+                            label=f"{what}, {_dx_label(ds, r)}")
         if str(sp) in PAPER:
             p = PAPER[str(sp)]
             ax.axhline(p["max_displacement"] * 1e3, color="k", ls=":", lw=1,

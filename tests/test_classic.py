@@ -136,7 +136,7 @@ TOL_POWER = 1e-12
 
 
 @pytest.mark.parametrize("d, reduce", [(2, False), (3, False), (3, True)])
-def test_internal_forces_work_as_the_stress_on_the_velocity_gradient_across_density_jumps(d, reduce):
+def test_internal_forces_work_as_stress_on_velocity_gradient_across_density_jumps(d, reduce):
     """The velocity gradient is the power conjugate of eq. 1's forces for any densities:
     Σ_i m_i v_i · a_i = −Σ_i (m_i/ρ_i) σ_i : L_i, so the internal forces do exactly the work the
     stress path stores. This needs L_i = Σ_j (m_j/ρ_i) (v_j − v_i) ⊗ ∇_i W_ij (with V_j = m_j/ρ_j
