@@ -1309,8 +1309,8 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                             f"{100 * root_tolerance(ds, str(case), int(r)):.1f} %)"
                             for r, v, e in zip(sr, c, ds.static_root_error.sel(case=case).values)
                             if np.isfinite(v))
-                + f"; observed order of csph's error {float(ds.static_root_order.sel(case=case)):.2f} "
-                "(least squares).")
+                + (f"; observed order of csph's error {float(ds.static_root_order.sel(case=case)):.2f} "
+                   "(least squares)." if "static_root_order" in ds else "."))
             ok = np.isfinite(c)
             if ok.sum() >= 2:  # csph's own Richardson limit, from its two finest, beside the FEM's
                 lim = fem_slope_limit(sr[ok], c[ok])
