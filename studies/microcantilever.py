@@ -25,9 +25,10 @@ no singular point lies — which converges on the FEM's ladder; csph's comes fro
 the FEM's path (:func:`csph_static`; the dynamic runs fail first at the singular points)
 (:func:`root_gates`), at the run's resolutions and at H/Δx = 40 (:data:`STATIC_FINEST`), where
 the issue's bounds at the finest resolution — elastic slope within 1 %, load at the first failure
-within 3 % — are gated as written (:func:`finest_gates`). Gate 6 (the full 2-D run, shown, not gated): the same scene by the FEM with
-element deletion (:func:`fem_deletion`), its load beside csph's and its deleted elements beside
-the failed particles, with their share where the low ε_L is. Gate 5 (:func:`band_gates`): the energy the main crack takes
+within 3 % — are gated as written (:func:`finest_gates`). Gate 6 (the full 2-D run, shown, not
+gated): the same scene by the FEM with element deletion (:func:`fem_deletion`), its load beside
+csph's and its deleted elements beside the failed particles, with their share where the low ε_L
+is. Gate 5 (:func:`band_gates`): the energy the main crack takes
 (:func:`fracture_energy`) falls with the spacing under the literal ε_L and stays within 10 % across
 the ladder under the crack band (rule ``regularised``, :data:`BAND`). The other gates are the
 checks the physics and the paper's robustness claim allow without a reference (:func:`gates`).
@@ -1309,8 +1310,8 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                             f"{100 * root_tolerance(ds, str(case), int(r)):.1f} %)"
                             for r, v, e in zip(sr, c, ds.static_root_error.sel(case=case).values)
                             if np.isfinite(v))
-                + (f"; observed order of csph's error {float(ds.static_root_order.sel(case=case)):.2f} "
-                   "(least squares)." if "static_root_order" in ds else "."))
+                + f"; observed order of csph's error {float(ds.static_root_order.sel(case=case)):.2f} "
+                "(least squares).")
             ok = np.isfinite(c)
             if ok.sum() >= 2:  # csph's own Richardson limit, from its two finest, beside the FEM's
                 lim = fem_slope_limit(sr[ok], c[ok])
