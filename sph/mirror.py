@@ -31,11 +31,12 @@ tangent is the full stencil's, folded onto the real DOFs: K_q = Tᵀ K_ext T wit
 the real DOFs to the real and ghost ones (:func:`sph.total_lagrangian.tangent_matrix`).
 Energies, work and reactions of the quarter are the full body's divided by 2^P.
 
-Classic SPH (:mod:`sph.classic`) searches its neighbours in the current configuration (with a
-skin, again once a particle has moved half of it), so it finds its ghosts with them
-(``Body._find_ghosts``): the particles within 2h and the skin of every plane of a combination, mirrored with their velocity, density and stress (σ_g = R σ_src R), the
-neighbour sums taking the full body's masses (a plane particle's whole mass). Its rates and
-accelerations are per particle, so they are the full body's without a share.
+Classic SPH (:mod:`sph.classic`) searches its neighbours in the current configuration (with a skin,
+again once a particle has moved half of it), so it finds its ghosts with them
+(``Body._find_ghosts``): the particles within 2h and the skin of every plane of a combination,
+mirrored with their velocity, density and stress (σ_g = R σ_src R), the neighbour sums taking the
+full body's masses (a plane particle's whole mass). Its rates and accelerations are per particle, so
+they are the full body's without a share.
 
 Only lattice particles on the node lattice are mirrored (a node lies on each plane, so a plane
 particle is its own image and the roller holds its normal DOF, which the full body's symmetry
