@@ -485,6 +485,7 @@ class Run:
         if snap:
             snap(0)
         status, criterion = "ok", "none"
+        t_cut = None  # time of the first record at which drive.separate's sets are cut apart
         t_loop = 0.0
         first = None  # (time, steps) of the first chunk: JIT compilation happens there
         bar = progress.bar(n_steps, snap_name, unit="step", delay=2.0, leave=False)
@@ -540,6 +541,12 @@ class Run:
                     status = (f"unstable: energy balance grew by {change:+.3g} of the energy scale, "
                               f"exponentially ({rate:.3g} per step), at t={body.t:.4g} s")
                     break
+            if drive.separate is not None:
+                if t_cut is None and self.separated(*drive.separate):
+                    t_cut = body.t
+                if t_cut is not None and body.t >= t_cut + drive.after * (1 - 1e-9):
+                    criterion = "separated"
+                    break
             if dis is not None:
                 d95 = dis(body.x)[0] if (len(times) - 1) % every_dis == 0 or body.steps >= n_steps else dh[-1]
                 dh.append(d95)
@@ -554,6 +561,7 @@ class Run:
         t = np.asarray(times)
         jit = jit_estimate(*first, t_loop - first[0], body.steps - first[1]) if first else 0.0
         out = dict(time=t, status=status, criterion=criterion, dt=dt, steps=int(body.steps),
+                   t_separated=math.nan if t_cut is None else float(t_cut),
                    wall_time=t_loop - jit, jit_time=jit, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
                    kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
@@ -603,6 +611,15 @@ class Run:
         return out
 
     # -- contact: the generic velocity Verlet ---------------------------------------------------
+    def separated(self, a: str, b: str) -> bool:
+        """Whether no chain of intact particles joins the sets ``a`` and ``b`` (the method's
+        ``components``; False where the method does not say)."""
+        parts = self.body.components()
+        if parts is None:
+            return False
+        sets = self.ps.sets
+        return not set(np.unique(parts[sets[a]])) & set(np.unique(parts[sets[b]]))
+
     def _contact_setup(self):
         if not self.model.contact:
             return None

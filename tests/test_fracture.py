@@ -92,6 +92,47 @@ def test_a_crack_tip_keeps_the_pairs_around_its_corner():
     assert np.any(live & (rows == a) & (cols == b)) and np.any(live & (rows == b) & (cols == a))
 
 
+def test_a_one_particle_ligament_is_detached():
+    """Column 6 failed except the particle at row 3: that particle, failed cells above and below,
+    is a hinge between the two sides (sph.crack) and is detached — no pair joins the two sides,
+    it carries no volume. A crack tip (column 6 failed up to row 2 only) keeps its next particle:
+    one failed side is not a ligament."""
+    ps, body = block()
+    X = ps.X
+    failed = (X[:, 0] == 6) & (X[:, 1] != 3)
+    body.cracks.update(failed, X, lambda: 0.0)
+    hinge = np.flatnonzero((X[:, 0] == 6) & (X[:, 1] == 3))[0]
+    assert body.cracks.detached[hinge] and body.disc.V[hinge] == 0.0
+    assert (body.cracks.detached & ~failed).sum() == 1  # (a failed one may lose its row too)
+    rows, cols, live = _pairs(body)
+    left, right = X[:, 0] < 6, X[:, 0] > 6
+    assert not np.any(live & ((left[rows] & right[cols]) | (right[rows] & left[cols])))
+
+    ps, body = block()
+    tip = (ps.X[:, 0] == 6) & (ps.X[:, 1] <= 2)
+    body.cracks.update(tip, ps.X, lambda: 0.0)
+    assert not (body.cracks.detached & ~tip).any()
+
+
+def test_ligaments_on_a_lattice():
+    """lattice_sides finds the lattice neighbours along each axis (−1 at a surface); ligaments
+    flags the intact particles with blocked neighbours on both sides along one axis, in 3-D too."""
+    from sph.crack import lattice_sides, ligaments
+
+    g = np.arange(3, dtype=float)
+    X = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3) * 0.5
+    sides = lattice_sides(X, 0.5)
+    centre = 13  # (1, 1, 1)
+    assert sorted(sides[centre].ravel()) == [4, 10, 12, 14, 16, 22]
+    assert (sides[0] == -1).sum() == 3  # a corner: no neighbour below on any axis
+    blocked = np.zeros(len(X), bool)
+    blocked[[12, 14]] = True  # either side of the centre along y
+    assert np.flatnonzero(ligaments(sides, blocked)).tolist() == [centre]
+    blocked[:] = False
+    blocked[[12, 16]] = True  # blocked on two different axes: not a ligament
+    assert not ligaments(sides, blocked).any()
+
+
 @pytest.mark.parametrize("crack", ["visibility", "none"])
 def test_cracked_halves_separate_freely(crack):
     """A block with a failed column, its two halves moved apart rigidly: with the visibility
@@ -207,6 +248,24 @@ def test_energy_balance_needs_every_term(run2d, drop):
     """Without any one of the four terms the balance fails the 1 % tolerance: the test above
     cannot pass with a term missing or zero."""
     assert balance_error(run2d, drop).max() > TOL_BALANCE
+
+
+def test_run_stops_after_the_separation(run2d):
+    """The run ends ``t_after`` past the first record at which no chain of intact particles joins
+    the loading patch and the held faces (the driver's ``separate``), well before ``t_end``: the
+    last record within one record interval of t_separated + t_after."""
+    sc = MicroCantilever(dim=2)
+    t = run2d["time"]
+    assert run2d["criterion"] == "separated"
+    assert 0 < run2d["t_separated"] < sc.t_end - sc.t_after
+    assert t[-1] == pytest.approx(run2d["t_separated"] + sc.t_after, abs=1.01 * np.diff(t).max())
+
+
+def test_run_without_separation_goes_to_t_end():
+    """Nothing fails before 0.4 µs: the run goes to t_end and reports no separation time."""
+    out = driver.solve("csph", MicroCantilever(dim=2, t_end=4e-7), 5)
+    assert out["criterion"] == "none" and np.isnan(out["t_separated"])
+    assert out["time"][-1] == pytest.approx(4e-7, rel=1e-2)
 
 
 def test_microcantilever_separates(run2d):

@@ -400,26 +400,38 @@ def test_fracture_energy_of_the_main_crack():
 
 def test_band_gate():
     """Gate 5 passes a regularised ladder spread by 8 % and fails one spread by 12 % (max/min − 1
-    against 10 %); the literal ladder's power of Δx is read back (G ∝ Δx exactly: 1)."""
+    against 10 %), over the runs whose band (1 µm) is wider than the spacing (H = 5 µm: H/Δx =
+    10, 15, 20; the run at 5, where the band is one spacing, is left out however far off it is);
+    a run of them without a fracture energy fails it; the literal ladder's power of Δx is read
+    back (G ∝ Δx exactly: 1)."""
     import xarray as xr
 
-    from studies.microcantilever import band_gates, fracture_ladder, spacing_power
+    from studies.microcantilever import band_gates, band_ladder, fracture_ladder, spacing_power
 
-    res = np.array([5, 10, 20])
+    res = np.array([5, 10, 15, 20])
 
     def ds_with(reg):
-        G = np.full((1, 2, 2, 3), np.nan)
+        G = np.full((1, 2, 2, 4), np.nan)
         G[0, :, 0] = 6e-6 * 5 / res  # compression (literal eps_L): ~ dx
         G[0, :, 1] = reg
-        return xr.Dataset({"fracture_energy": (("solver", "case", "rule", "resolution"), G)},
+        dims = ("solver", "case", "rule", "resolution")
+        return xr.Dataset({"fracture_energy": (dims, G),
+                           "status": (dims, np.full(G.shape, "ok"))},
                           coords={"solver": ["csph"], "case": ["inter", "intra"],
-                                  "rule": ["compression", "regularised"], "resolution": res})
+                                  "rule": ["compression", "regularised"], "resolution": res},
+                          attrs={"param_H": 5e-6, "param_band": 0.0})
 
-    ok = band_gates(ds_with([6.0e-6, 6.3e-6, 6.48e-6]))
-    bad = band_gates(ds_with([6.0e-6, 6.3e-6, 6.72e-6]))
+    ok = band_gates(ds_with([9e-6, 6.0e-6, 6.3e-6, 6.48e-6]))
+    bad = band_gates(ds_with([6.0e-6, 6.0e-6, 6.3e-6, 6.72e-6]))
+    gone = band_gates(ds_with([6.0e-6, 6.0e-6, np.nan, 6.1e-6]))
     assert len(ok) == 2 and all(g.passed for g in ok)
     assert len(bad) == 2 and not any(g.passed for g in bad)
-    r, G = fracture_ladder(ds_with([6e-6] * 3), "inter", "compression")
+    assert len(gone) == 2 and not any(g.passed for g in gone)
+    assert list(band_ladder(ds_with([6e-6] * 4), "inter")[0]) == [10, 15, 20]
+    wide = ds_with([6e-6] * 4)
+    wide.attrs["param_band"] = 2e-6  # wider than the spacing at 5 too
+    assert list(band_ladder(wide, "inter")[0]) == [5, 10, 15, 20]
+    r, G = fracture_ladder(ds_with([6e-6] * 4), "inter", "compression")
     assert spacing_power(r, G) == pytest.approx(1.0, rel=1e-12)
 
 

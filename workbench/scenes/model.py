@@ -266,7 +266,10 @@ class Explicit:
     particle disorder measured on the set ``disorder_set`` (all particles when None).
     ``dt_reference``: what ``dt_factor`` multiplies — 'cfl' (the default: the CFL estimate
     Δx/c_p) or 'spectrum' (the method's critical step 2/ω_max at the initial state,
-    :mod:`sph.spectrum`)."""
+    :mod:`sph.spectrum`). ``separate`` (two set names) with ``after`` (s): the run stops ``after``
+    seconds past the first record at which no chain of intact particles joins the two sets (a
+    crack has cut the body between them; the method's ``components``), ``t_end`` then the
+    longest it may run."""
 
     t_end: float
     dt_factor: float = 0.3
@@ -276,6 +279,8 @@ class Explicit:
     disorder: float | None = None
     disorder_set: str | None = None
     dt_reference: str = "cfl"
+    separate: tuple[str, str] | None = None
+    after: float = 0.0
 
 
 # ------------------------------------------------------------------------------------------------
