@@ -17,7 +17,10 @@
    force plus :mod:`sph.contact`, weighted on the symmetry planes: :meth:`Run.mirror_planes`),
    loads that vary in time updated at chunk midpoints (chunks of at most
    :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
-5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`;
+5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`; with the drive's
+   ``separate`` the run also stops ``after`` seconds past the first record at which no chain of
+   intact particles joins two sets (:meth:`Run.separated`, a crack has cut the body: status ``ok``,
+   criterion ``separated``, the time in ``t_separated``);
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
    :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
