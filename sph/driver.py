@@ -613,7 +613,6 @@ class Run:
                        disorder_history=np.asarray(dh), x=body.x.copy(), X=ps.X.copy())
         return out
 
-    # -- contact: the generic velocity Verlet ---------------------------------------------------
     def separated(self, a: str, b: str) -> bool:
         """Whether no chain of intact particles joins the sets ``a`` and ``b`` (the method's
         ``components``; False where the method does not say)."""
@@ -623,6 +622,7 @@ class Run:
         sets = self.ps.sets
         return not set(np.unique(parts[sets[a]])) & set(np.unique(parts[sets[b]]))
 
+    # -- contact: the generic velocity Verlet ---------------------------------------------------
     def _contact_setup(self):
         if not self.model.contact:
             return None
