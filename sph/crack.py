@@ -211,21 +211,24 @@ def visible_rows(x, X, dx, indptr, indices, G, alive, blocked, skip, s_min, shad
     return cut, detached
 
 
-def lattice_sides(X: np.ndarray, dx: float) -> np.ndarray:
+def lattice_sides(X: np.ndarray, dx: float, indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """(N, d, 2) int: for each particle and lattice axis, the particle at X − Δx e_k and the one
-    at X + Δx e_k (−1 where there is none: a surface, or no lattice there), found to 1e-6 Δx."""
-    from scipy.spatial import cKDTree
-
+    at X + Δx e_k (−1 where there is none: a surface, or no lattice there), to 1e-6 Δx, read from
+    the neighbour rows ``indptr``, ``indices`` (CSR; mirror images, indices ≥ N, left out)."""
     X = np.asarray(X, float)
     N, d = X.shape
-    tree = cKDTree(X)
+    rows = np.repeat(np.arange(N), np.diff(indptr))
+    cols = np.asarray(indices, np.int64)
+    real = cols < N
+    rows, cols = rows[real], cols[real]
+    step = (X[cols] - X[rows]) / dx
     out = np.full((N, d, 2), -1, np.int64)
     for k in range(d):
+        off = np.delete(step, k, axis=1)
+        on_axis = np.all(np.abs(off) < 1e-6, axis=1)
         for j, sign in enumerate((-1.0, 1.0)):
-            Y = X.copy()
-            Y[:, k] += sign * dx
-            dist, idx = tree.query(Y, distance_upper_bound=1e-6 * dx)
-            out[:, k, j] = np.where(np.isfinite(dist), idx, -1)
+            hit = on_axis & (np.abs(step[:, k] - sign) < 1e-6)
+            out[rows[hit], k, j] = cols[hit]
     return out
 
 
@@ -258,7 +261,7 @@ class Cracks:
         self.detached = np.zeros(dsc.n, bool)
         self.pairs_cut = 0
         self.released = 0.0
-        self.sides = lattice_sides(dsc.X, self.dx)
+        self.sides = lattice_sides(dsc.X, self.dx, dsc.indptr, dsc.indices)
 
     def update(self, failed: np.ndarray, x: np.ndarray, energy) -> float:
         """Apply the criterion at the current positions x (N, d) for the failed set ``failed``

@@ -115,13 +115,15 @@ def test_a_one_particle_ligament_is_detached():
 
 
 def test_ligaments_on_a_lattice():
-    """lattice_sides finds the lattice neighbours along each axis (−1 at a surface); ligaments
-    flags the intact particles with blocked neighbours on both sides along one axis, in 3-D too."""
+    """lattice_sides finds the lattice neighbours along each axis in the neighbour rows (−1 at a
+    surface); ligaments flags the intact particles with blocked neighbours on both sides along
+    one axis, in 3-D too."""
     from sph.crack import lattice_sides, ligaments
+    from sph.neighbours import neighbour_list
 
     g = np.arange(3, dtype=float)
     X = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3) * 0.5
-    sides = lattice_sides(X, 0.5)
+    sides = lattice_sides(X, 0.5, *neighbour_list(X, 1.1 * 0.5))
     centre = 13  # (1, 1, 1)
     assert sorted(sides[centre].ravel()) == [4, 10, 12, 14, 16, 22]
     assert (sides[0] == -1).sum() == 3  # a corner: no neighbour below on any axis
