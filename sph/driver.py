@@ -20,7 +20,8 @@
 5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`; with the drive's
    ``separate`` the run also stops ``after`` seconds past the first record at which no chain of
    intact particles joins two sets (:meth:`Run.separated`, a crack has cut the body: status ``ok``,
-   criterion ``separated``, the time in ``t_separated``);
+   criterion ``separated``, the time in ``t_separated``, the state then in ``at_separation``:
+   :meth:`Run.cut_state`);
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
    :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
@@ -489,6 +490,7 @@ class Run:
             snap(0)
         status, criterion = "ok", "none"
         t_cut = None  # time of the first record at which drive.separate's sets are cut apart
+        at_cut = None  # the state then (cut_state)
         t_loop = 0.0
         first = None  # (time, steps) of the first chunk: JIT compilation happens there
         bar = progress.bar(n_steps, snap_name, unit="step", delay=2.0, leave=False)
@@ -547,6 +549,7 @@ class Run:
             if drive.separate is not None:
                 if t_cut is None and self.separated(*drive.separate):
                     t_cut = body.t
+                    at_cut = self.cut_state(dis_e)
                 if t_cut is not None and body.t >= t_cut + drive.after * (1 - 1e-9):
                     criterion = "separated"
                     break
@@ -564,7 +567,7 @@ class Run:
         t = np.asarray(times)
         jit = jit_estimate(*first, t_loop - first[0], body.steps - first[1]) if first else 0.0
         out = dict(time=t, status=status, criterion=criterion, dt=dt, steps=int(body.steps),
-                   t_separated=math.nan if t_cut is None else float(t_cut),
+                   t_separated=math.nan if t_cut is None else float(t_cut), at_separation=at_cut,
                    wall_time=t_loop - jit, jit_time=jit, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
                    kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
@@ -611,6 +614,19 @@ class Run:
             out.update(stable=status == "ok", disorder=d95, disorder_max=dmax,
                        min_spacing=dis.min_spacing(body.x) if ok_x else math.nan,
                        disorder_history=np.asarray(dh), x=body.x.copy(), X=ps.X.copy())
+        return out
+
+    def cut_state(self, dissipated: dict) -> dict:
+        """What a study measures of a crack when it has just cut the body (``at_separation``):
+        the material ``history``, ``failed_particles`` where the model observes failure, and the
+        dissipated energies at the record (``dissipated``: name -> values so far, the last one
+        taken) — what fails later (the fragments moving on, for ``after``) left out."""
+        state = self.body.field_state()
+        out = {n: float(v[-1]) for n, v in dissipated.items()}
+        if state.get("history") is not None:
+            out["history"] = np.array(state["history"])
+        if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
+            out["failed_particles"] = self._failed_mask(state)
         return out
 
     def separated(self, a: str, b: str) -> bool:

@@ -263,10 +263,43 @@ def test_run_stops_after_the_separation(run2d):
     assert t[-1] == pytest.approx(run2d["t_separated"] + sc.t_after, abs=1.01 * np.diff(t).max())
 
 
+def test_state_at_the_separation(run2d):
+    """The driver keeps the state of the record at which the crack cut the body
+    (``at_separation``): its released energy is the one recorded then, its failed particles are
+    among the final ones (damage never heals) and its plastic work nowhere above the final."""
+    from workbench.materials import HIST_W_P
+
+    cut = run2d["at_separation"]
+    k = int(np.flatnonzero(run2d["time"] == run2d["t_separated"])[0])
+    assert cut["released_energy"] == run2d["released_energy"][k]
+    assert cut["plastic_work"] == run2d["plastic_work"][k]
+    assert cut["failed_particles"].any()
+    assert not (cut["failed_particles"] & ~run2d["failed_particles"]).any()
+    assert (cut["history"][:, HIST_W_P] <= run2d["history"][:, HIST_W_P]).all()
+
+
+def test_the_cut_does_not_depend_on_how_long_the_run_goes_on(run2d):
+    """t_after = 0 runs on to t_end (8 µs, three times as long as the default run) and still
+    records the cut: the same time and the same state at it as the run that stopped t_after
+    later (the records fall at the same steps: the same t_end), so the crack's energy measured
+    there (studies.microcantilever.fracture_energy) is the same."""
+    from studies.microcantilever import fracture_energy
+
+    t_end = MicroCantilever().t_end
+    out = driver.solve("csph", MicroCantilever(dim=2, t_after=0.0), 5)
+    assert out["criterion"] == "none" and out["time"][-1] == pytest.approx(t_end, rel=1e-2)
+    assert out["t_separated"] == run2d["t_separated"]
+    np.testing.assert_allclose(out["at_separation"]["history"], run2d["at_separation"]["history"],
+                               rtol=1e-12, atol=0)
+    dx = MicroCantilever().H / 5
+    assert fracture_energy(out, dx) == pytest.approx(fracture_energy(run2d, dx), rel=1e-12)
+
+
 def test_run_without_separation_goes_to_t_end():
     """Nothing fails before 0.4 µs: the run goes to t_end and reports no separation time."""
     out = driver.solve("csph", MicroCantilever(dim=2, t_end=4e-7), 5)
     assert out["criterion"] == "none" and np.isnan(out["t_separated"])
+    assert out["at_separation"] is None
     assert out["time"][-1] == pytest.approx(4e-7, rel=1e-2)
 
 

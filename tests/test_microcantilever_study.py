@@ -398,6 +398,30 @@ def test_fracture_energy_of_the_main_crack():
     assert G_all == pytest.approx(len(crack + patch) * dx * dx * 1.2e6 + 3e-8, rel=1e-12)
 
 
+def test_fracture_energy_at_the_separation():
+    """G is taken from the state at which the crack cut the body (the driver's
+    ``at_separation``): a particle that fails later (here one at the top face beside the crack,
+    after the cut) is left out, and the released energy is the one then; ``at='end'`` takes the
+    final state; without a separation the final state is the crack's."""
+    from studies.microcantilever import fracture_energy
+    from workbench.materials import HIST_W_P
+
+    dx = 0.5e-6
+    crack = [(4, j) for j in range(11)]
+    later = _lattice_out(crack + [(3, 10)], dx)
+    cut = _lattice_out(crack, dx)
+    cut["history"][:, HIST_W_P] *= 0.5  # the crack's plastic work then, before it grew further
+    later["at_separation"] = dict(history=cut["history"], failed_particles=cut["failed_particles"],
+                                  released_energy=float(cut["released_energy"][-1]))
+    per = dx * dx * (0.5e6 + 2e5)  # V (W_p + W_rel) of a crack particle at the cut
+    G, _, n = fracture_energy(later, dx)
+    assert n == 11 and G == pytest.approx(11 * per + 3e-8, rel=1e-12)
+    G_end, _, n_end = fracture_energy(later, dx, at="end")
+    assert n_end == 12 and G_end == pytest.approx(12 * dx * dx * 1.2e6 + 3e-8, rel=1e-12)
+    later["at_separation"] = None
+    assert fracture_energy(later, dx) == fracture_energy(later, dx, at="end")
+
+
 def test_band_gate():
     """Gate 5 passes a regularised ladder spread by 8 % and fails one spread by 12 % (max/min − 1
     against 10 %), over the runs whose band (1 µm) is wider than the spacing (H = 5 µm: H/Δx =

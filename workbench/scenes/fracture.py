@@ -159,7 +159,7 @@ class MicroCantilever(Scene):
     t_end: float = param(8e-6, "s", "longest simulated time (the run stops t_after past the "
                          "separation)", lo=0, lo_open=True)
     t_after: float = param(1.5e-6, "s", "time run on once no chain of intact particles joins the "
-                           "loading patch and the held faces (0: run to t_end)", lo=0)
+                           "loading patch and the held faces (0: run to t_end, the separation still recorded)", lo=0)
     dt_factor: float = param(0.3, "-", "time step over its reference (dt_reference)", lo=0, hi=10,
                              lo_open=True)
     dt_reference: str = param("cfl", "-", "what dt_factor multiplies: the CFL estimate or the "
@@ -274,8 +274,8 @@ class MicroCantilever(Scene):
                          m.Prescribed("patch", up, velocity=v)),
             drive=m.Explicit(self.t_end, self.dt_factor, n_out=400, energy_growth=None,
                              dt_reference=self.dt_reference,
-                             separate=("patch", "held") if self.t_after > 0 else None,
-                             after=self.t_after),
+                             separate=("patch", "held"),
+                             after=self.t_after if self.t_after > 0 else math.inf),
             observables=(m.Reaction("force", "patch", up), m.Reaction("support", "held", up),
                          m.Displacement("deflection", "patch", up),
                          m.FailedFraction("failed", None),

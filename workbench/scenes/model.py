@@ -269,7 +269,7 @@ class Explicit:
     :mod:`sph.spectrum`). ``separate`` (two set names) with ``after`` (s): the run stops ``after``
     seconds past the first record at which no chain of intact particles joins the two sets (a
     crack has cut the body between them; the method's ``components``), ``t_end`` then the
-    longest it may run."""
+    longest it may run (``after`` = inf: to ``t_end``, the time and state of the cut recorded)."""
 
     t_end: float
     dt_factor: float = 0.3
