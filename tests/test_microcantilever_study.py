@@ -430,7 +430,8 @@ def test_band_gate():
     back (G ∝ Δx exactly: 1)."""
     import xarray as xr
 
-    from studies.microcantilever import band_gates, band_ladder, fracture_ladder, spacing_power
+    from studies.microcantilever import (band_gates, band_ladder, fracture_ladder, fracture_note,
+                                         spacing_power)
 
     res = np.array([5, 10, 15, 20])
 
@@ -449,6 +450,8 @@ def test_band_gate():
     bad = band_gates(ds_with([6.0e-6, 6.0e-6, 6.3e-6, 6.72e-6]))
     gone = band_gates(ds_with([6.0e-6, 6.0e-6, np.nan, 6.1e-6]))
     assert len(ok) == 2 and all(g.passed for g in ok)
+    note = fracture_note(ds_with([9e-6, 6.0e-6, 6.3e-6, 6.48e-6]), "inter")
+    assert "max/min - 1 = 8.0 % over H/dx = 10, 15, 20 (band > dx)" in note  # the gate's ladder
     assert len(bad) == 2 and not any(g.passed for g in bad)
     assert len(gone) == 2 and not any(g.passed for g in gone)
     assert list(band_ladder(ds_with([6e-6] * 4), "inter")[0]) == [10, 15, 20]
