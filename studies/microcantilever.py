@@ -29,8 +29,9 @@ within 3 % — are gated as written (:func:`finest_gates`). Gate 6 (the full 2-D
 gated): the same scene by the FEM with element deletion (:func:`fem_deletion`), its load beside
 csph's and its deleted elements beside the failed particles, with their share where the low ε_L
 is. Gate 5 (:func:`band_gates`): the energy the main crack takes to cut the body
-(:func:`fracture_energy`, at the record of the cut) falls with the spacing under the literal ε_L and stays within 10 % across
-the ladder under the crack band (rule ``regularised``, :data:`BAND`). The other gates are the
+(:func:`fracture_energy`, at the record of the cut) falls with the spacing under the literal ε_L
+and stays within 10 % across the ladder under the crack band (rule ``regularised``,
+:data:`BAND`). The other gates are the
 checks the physics and the paper's robustness claim allow without a reference (:func:`gates`).
 2-D runs are plane strain (csph has no plane stress); ``--quick`` runs the 2-D variant at
 H/Δx = 5, the full run the scene's own dimension (3-D by default, with nodal integration,
@@ -751,20 +752,20 @@ def fracture_energy(out: dict, spacing: float, at: str = "separation") -> tuple[
     the state of the record at which the crack first cut the loading patch off from the held faces
     (the driver's ``at_separation``; the final state where the run was never cut apart), 'end'
     the final state. What fails after the cut — the broken-off piece, still driven by the patch,
-    swinging past the block for the ``t_after`` the run goes on — is not the crack's and grows
-    with how long one watches. NaN without the history and volumes."""
+    swinging past the block for the ``t_after`` the run goes on — is not the crack's, and would
+    make G depend on how long one watches. NaN without the history and volumes."""
     from workbench.materials import HIST_W_P, HIST_W_REL
 
-    state = out.get("at_separation") if at == "separation" else None
-    state = state or dict(history=out.get("history"), failed_particles=out.get("failed_particles", ()),
-                          released_energy=np.asarray(out.get("released_energy", [np.nan]))[-1])
+    state = (out.get("at_separation") if at == "separation" else None) or dict(
+        history=out.get("history"), failed_particles=out.get("failed_particles", ()),
+        released_energy=np.asarray(out.get("released_energy", [np.nan]))[-1])
     h, V = state.get("history"), out.get("volume")
     failed = np.asarray(state.get("failed_particles", ()), bool)
     if h is None or V is None or not failed.size or np.shape(h)[1] <= HIST_W_REL:
         return np.nan, np.nan, 0
     h, V = np.asarray(h), np.asarray(V, float)
     W = h[:, HIST_W_P] + h[:, HIST_W_REL]
-    cut = float(state["released_energy"]) - float(V @ h[:, HIST_W_REL])
+    cut = float(state.get("released_energy", np.nan)) - float(V @ h[:, HIST_W_REL])
     crack = crack_particles(dict(X=out["X"], failed_particles=failed), spacing)
     return float(V[crack] @ W[crack]) + cut, float(V[failed] @ W[failed]) + cut, int(crack.sum())
 

@@ -13,12 +13,13 @@ top-face patch 2–4 µm from the free end (its ends on the lattice lines neares
 of the beam's first bending mode, ~0.1 µs: the kinetic energy stays below 1 % of the elastic
 energy before the first failure); the run stops ``t_after`` = 1.5 µs after the crack has cut the
 loading patch off from the held faces (no chain of intact particles joins them: the driver's
-``separate``), 8 µs at most (``t_end``; the first failure near 0.7–1 µs; the last ligament of
-the crack breaks between 1 and 7 µs depending on the case, the rule and the resolution, and in
-some runs never: a one-particle ligament in the middle of the section is a hinge, which bends
-without straining); grain boundaries 1 µm thick (``gb_thickness``: one particle spacing at
-resolution 5, the coarsest that resolves them). The resolution r puts r particles across H (spacing H/r).
-2-D runs are plane strain (csph does not model plane stress). Grains: the Voronoi cells (nearest-seed assignment, exact for any point — no
+``separate``; ``t_after`` = 0: on to ``t_end``, the cut still recorded), 8 µs at most
+(``t_end``; the first failure near 0.7–1 µs; the last ligament of the crack breaks between 1 and
+7 µs depending on the case, the rule and the resolution — a one-particle ligament, a hinge that
+bends without straining, is detached by :func:`sph.crack.ligaments`); grain boundaries 1 µm thick
+(``gb_thickness``: one particle spacing at resolution 5, the coarsest that resolves them). The
+resolution r puts r particles across H (spacing H/r). 2-D runs are plane strain (csph does not
+model plane stress). Grains: the Voronoi cells (nearest-seed assignment, exact for any point — no
 polyhedra are built) of ``n_grains`` seeds placed one per equal slice of the beam's length, jittered
 inside their slice and across the section by a seeded generator (``seed``); a grain boundary is
 the set of points within half its thickness of the bisector plane of the two nearest seeds, when
@@ -159,7 +160,8 @@ class MicroCantilever(Scene):
     t_end: float = param(8e-6, "s", "longest simulated time (the run stops t_after past the "
                          "separation)", lo=0, lo_open=True)
     t_after: float = param(1.5e-6, "s", "time run on once no chain of intact particles joins the "
-                           "loading patch and the held faces (0: run to t_end, the separation still recorded)", lo=0)
+                           "loading patch and the held faces (0: run to t_end, the separation "
+                           "still recorded)", lo=0)
     dt_factor: float = param(0.3, "-", "time step over its reference (dt_reference)", lo=0, hi=10,
                              lo_open=True)
     dt_reference: str = param("cfl", "-", "what dt_factor multiplies: the CFL estimate or the "
