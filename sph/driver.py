@@ -581,17 +581,16 @@ class Run:
         for n, v in dis_e.items():
             out[n] = np.asarray(v)
         # the final state: reference and current positions, regions, and the failed particles
+        state = body.field_state()
         out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
                    region_names=list(ps.region_names),
                    sets={k: np.asarray(v).copy() for k, v in ps.sets.items()},
-                   history=np.array(body.field_state().get("history", np.zeros((ps.n, 0)))))
-        if body.field_state().get("V") is not None:  # the volumes of the history's work columns
-            out["volume"] = np.array(body.field_state()["V"])
+                   **self.material_state(state))
+        if state.get("V") is not None:  # the volumes of the history's work columns
+            out["volume"] = np.array(state["V"])
         parts = body.components()
         if parts is not None:
             out["component"] = np.asarray(parts)
-        if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
-            out["failed_particles"] = self._failed_mask(body.field_state())
         e = np.asarray(bal)
         drift = float((e[-1] - e[0]) / e_scale) if e_scale > 0 else math.nan
         if drive.energy_growth is None:
@@ -621,10 +620,15 @@ class Run:
         the material ``history``, ``failed_particles`` where the model observes failure, and the
         dissipated energies at the record (``dissipated``: name -> values so far, the last one
         taken) — what fails later (the fragments moving on, for ``after``) left out."""
-        state = self.body.field_state()
-        out = {n: float(v[-1]) for n, v in dissipated.items()}
-        if state.get("history") is not None:
-            out["history"] = np.array(state["history"])
+        return {**{n: float(v[-1]) for n, v in dissipated.items()}, **self.material_state()}
+
+    def material_state(self, state: dict | None = None) -> dict:
+        """A copy of the body's material ``history`` ((N, 0) without one) and, where the model
+        observes failure, its ``failed_particles``, from ``state`` (the body's field state; now
+        when None)."""
+        state = self.body.field_state() if state is None else state
+        h = state.get("history")
+        out = dict(history=np.zeros((self.ps.n, 0)) if h is None else np.array(h))
         if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
             out["failed_particles"] = self._failed_mask(state)
         return out

@@ -233,10 +233,10 @@ class MicroCantilever(Scene):
         particles and the load is stiffer the farther apart they are (2-D, first static point:
         csph's slope 1.11e9 N/m² at H/Δx = 6 with the end particles 0.83 µm apart, inside
         [0.8 L, 0.9 L], against the FEM's 1.66e9); the nearest lines keep that span within Δx of
-        the patch's 2 µm at every spacing (node lattice, the model's; a cell lattice, ``lattice='cell'``,
-        has its points half a spacing off these lines). On the study's ladder (H/Δx = 5, 10, 15, 20) 0.8 L and 0.9 L
-        are lattice lines already and nothing moves; the FEM's mesh, built on the same model, has
-        nodes on these lines."""
+        the patch's 2 µm at every spacing (node lattice, the model's; a cell lattice,
+        ``lattice='cell'``, has its points half a spacing off these lines). On the study's ladder
+        (H/Δx = 5, 10, 15, 20) 0.8 L and 0.9 L are lattice lines already and nothing moves; the
+        FEM's mesh, built on the same model, has nodes on these lines."""
         x0 = self.block_box().lo[0]  # the lattice's first line (the model's lowest x)
         qa = (0.8 * self.L - x0) / spacing
         qb = (0.9 * self.L - x0) / spacing
