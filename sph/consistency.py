@@ -151,37 +151,12 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
     if np.abs(X - (o + I * dx)).max() > 1e-6 * dx:
         raise ValueError("nodes: not on a lattice of spacing dx through origin (off by more than "
                          "1e-6 dx)")
-    signs = np.array(np.meshgrid(*[(0, 1)] * d, indexing="ij")).reshape(d, -1).T  # (2^d, d)
-    J = (2 * I[:, None, :] + signs[None]).reshape(-1, d)  # sub-cell indices, half-spacing grid
-    owner = np.repeat(np.arange(N), 2 ** d)
-    centres = o + (J - 0.5) * (0.5 * dx)
-    ins = np.asarray(inside(centres), dtype=bool).reshape(-1)
-    if ins.shape[0] != J.shape[0]:
-        raise ValueError("inside: must return one bool per point")
-    lo = J.min(0) - 1
-    ext = J.max(0) - lo + 2
-    def key(Jk):
-        k = np.zeros(Jk.shape[0], np.int64)
-        for a in range(d):
-            k = k * ext[a] + (Jk[:, a] - lo[a])
-        return k
-    keys_in = np.sort(key(J[ins]))
-    if keys_in.size and np.any(np.diff(keys_in) == 0):
-        raise ValueError("nodes: duplicate lattice nodes")
+    signs, ins, faces = _exposed_faces(X, I, o, dx, inside)
     area = (0.5 * dx) ** (d - 1)
-    V = np.bincount(owner[ins], minlength=N) * (0.5 * dx) ** d
+    V = np.bincount(np.repeat(np.arange(N), 2 ** d)[ins], minlength=N) * (0.5 * dx) ** d
     n = np.zeros((N, d))
-    Jin, own = J[ins], owner[ins]
-    for a in range(d):
-        for s in (-1, 1):
-            Jn = Jin.copy()
-            Jn[:, a] += s
-            kn = key(Jn)
-            pos = np.searchsorted(keys_in, kn)
-            pos = np.minimum(pos, max(keys_in.size - 1, 0))
-            present = keys_in.size > 0 and True
-            exposed = ~(keys_in[pos] == kn) if present else np.ones(kn.size, bool)
-            np.add.at(n[:, a], own[exposed], s * area)
+    for a, s, own, _ in faces:
+        np.add.at(n[:, a], own, s * area)
     if order == 2:
         Imin = I.min(0)
         dims = I.max(0) - Imin + 1
@@ -197,6 +172,64 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
             raise ValueError(f"exclude: expected shape (N,) = ({N},), got {exclude.shape}")
         V = _exclude(V, I, exclude)
     return V, n
+
+
+def _exposed_faces(X, I, o, dx: float, inside):
+    """The boundary faces of the half-spacing sub-cells of :func:`boundary_normals`: (signs (2^d, d)
+    the sub-cells' sides, ins (N·2^d,) the sub-cells inside, faces [(axis a, direction s, owners of
+    the exposed faces, which of them lie half a spacing from their owner)]). A face of a sub-cell
+    on the side s of its node lies through the node, or half a spacing from it (on the dual
+    cell's boundary) when the sub-cell is on that side."""
+    N, d = X.shape
+    signs = np.array(np.meshgrid(*[(0, 1)] * d, indexing="ij")).reshape(d, -1).T  # (2^d, d)
+    J = (2 * I[:, None, :] + signs[None]).reshape(-1, d)  # sub-cell indices, half-spacing grid
+    owner = np.repeat(np.arange(N), 2 ** d)
+    side = np.tile(signs, (N, 1))
+    centres = o + (J - 0.5) * (0.5 * dx)
+    ins = np.asarray(inside(centres), dtype=bool).reshape(-1)
+    if ins.shape[0] != J.shape[0]:
+        raise ValueError("inside: must return one bool per point")
+    lo = J.min(0) - 1
+    ext = J.max(0) - lo + 2
+
+    def key(Jk):
+        k = np.zeros(Jk.shape[0], np.int64)
+        for a in range(d):
+            k = k * ext[a] + (Jk[:, a] - lo[a])
+        return k
+    keys_in = np.sort(key(J[ins]))
+    if keys_in.size and np.any(np.diff(keys_in) == 0):
+        raise ValueError("nodes: duplicate lattice nodes")
+    Jin, own, sin = J[ins], owner[ins], side[ins]
+    faces = []
+    for a in range(d):
+        for s in (-1, 1):
+            Jn = Jin.copy()
+            Jn[:, a] += s
+            kn = key(Jn)
+            if keys_in.size:
+                pos = np.minimum(np.searchsorted(keys_in, kn), keys_in.size - 1)
+                exposed = keys_in[pos] != kn
+            else:
+                exposed = np.ones(kn.size, bool)
+            faces.append((a, s, own[exposed], sin[exposed, a] == (1 if s > 0 else 0)))
+    return signs, ins, faces
+
+
+def off_lattice_faces(nodes, dx: float, inside, origin=None) -> float:
+    """The share of the boundary of the body ``inside`` (as :func:`boundary_normals` sees it) that
+    lies half a spacing from the lattice nodes instead of through them: 0 for a union of boxes
+    whose faces lie on lattice planes (node lattice), 1 for a cell lattice. Where it is not 0 the
+    integration-consistent correction extrapolates the gradients of the outermost nodes to a face
+    beyond them; on a node lattice with some faces off (a 3-D beam of odd H/Δx on a block whose
+    faces are on the lattice) it is ill-posed — the corrections grow to ten times the gradients
+    and the highest frequency forty-fold."""
+    X = np.asarray(nodes, dtype=np.float64)
+    o = X[0] if origin is None else np.asarray(origin, dtype=np.float64)
+    I = np.rint((X - o) / dx).astype(np.int64)
+    _, _, faces = _exposed_faces(X, I, o, dx, inside)
+    total = sum(f[2].size for f in faces)
+    return float(sum(np.count_nonzero(f[3]) for f in faces) / total) if total else 0.0
 
 
 _STENCILS = np.array([(-1, 0, 1), (0, 1, 2), (-2, -1, 0)], np.int64)

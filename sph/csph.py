@@ -15,11 +15,14 @@ conserved to round-off, the tangent is symmetric. Explicit dynamics in one fused
 loop; statics by Newton (:mod:`sph.static`); optional hourglass control (:mod:`sph.hourglass`).
 
 Integration (``integration``): ``"consistent"`` (the default for particles on a node lattice:
-``"auto"`` picks it there, and ``"nodal"`` for other arrangements — 004's concentric rings, whose
-boundary is not a union of lattice cells, and the cell lattice, whose faces lie half a spacing
-outside the outermost particles: there the correction extrapolates and raises the highest
-frequency 2.4-fold (ω_max Δx/c = 6.9 against 2.9 nodal on the slab; 2.3 against 2.9 on a node
-lattice), which the explicit step of the CFL estimate does not survive) replaces G by the smallest change
+``"auto"`` picks it where every face of the body lies on a lattice plane, and ``"nodal"``
+elsewhere — 004's concentric rings, whose boundary is not a union of lattice cells; the cell
+lattice, whose faces lie half a spacing outside the outermost particles: there the correction
+extrapolates and raises the highest frequency 2.4-fold (ω_max Δx/c = 6.9 against 2.9 nodal on the
+slab; 2.3 against 2.9 on a node lattice), which the explicit step of the CFL estimate does not
+survive; and a node lattice with some faces half a spacing between its planes, where the
+correction is ill-posed: :func:`off_lattice_share`, kept in ``consistency`` when asked for
+explicitly) replaces G by the smallest change
 that makes the force patch test exact (:mod:`sph.consistency`: uniform stretch and shear are
 discrete equilibria with free faces, symmetry planes, loaded faces and clamps, at any resolution,
 while F stays exact for affine — and with the quadratic correction quadratic — motions and the
@@ -37,6 +40,8 @@ body). The registry (:data:`sph.METHODS`) names the variants: ``csph`` (quadrati
 ``hpm_vc`` (HPM's gradient, consistent integration with the quadratic basis).
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -125,6 +130,20 @@ def wls(ps, re_ratio: float | None = None, body=None) -> tl.Discretisation:
     return disc
 
 
+def off_lattice_share(ps) -> float:
+    """The share of the body's boundary that lies half a spacing from the lattice nodes
+    (:func:`sph.consistency.off_lattice_faces`): 0 when every face of the integration domain lies
+    on a lattice plane, 1 on a cell lattice; NaN off the lattice. ``integration='auto'`` takes the
+    integration-consistent correction only at 0: a body with some faces off (a 3-D beam whose side
+    faces fall between the lattice planes of its block) makes the correction ill-posed."""
+    from .consistency import off_lattice_faces
+
+    if ps.origin is None or ps.domain_shape is None:
+        return math.nan
+    shape = ps.domain_shape
+    return off_lattice_faces(ps.X, ps.dx, lambda q: shape.contains(q, 0.0), origin=ps.origin)
+
+
 def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
                correction: str = DEFAULT_CORRECTION, weights: str = "uniform",
                gradient: str = "kernel", re_ratio: float | None = None):
@@ -188,9 +207,9 @@ class CSPH(ParticleBody):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: {integration!r} is not one of {', '.join(map(repr, INTEGRATIONS))}")
         ps = particles
+        off = off_lattice_share(ps) if integration != "nodal" else math.nan
         if integration == "auto":
-            integration = ("consistent" if ps.lattice == "node" and ps.origin is not None
-                           and ps.domain_shape is not None else "nodal")
+            integration = "consistent" if ps.lattice == "node" and off == 0.0 else "nodal"
         self.integration = integration
         images = None
         if mirror == "auto" and ps.mirrors:  # the full body, restricted below (sph.mirror)
@@ -203,6 +222,7 @@ class CSPH(ParticleBody):
             disc, self.consistency = consistent(ps, h_ratio, kernel, correction,
                                                 gradient=gradient, re_ratio=re_ratio)
             self.normals = self.consistency["normals"]
+            self.consistency["off_lattice_share"] = off
         elif gradient == "wls":
             disc = wls(ps, re_ratio, body)
         else:

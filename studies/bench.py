@@ -117,11 +117,20 @@ def scene_options(name: str, solver: str) -> dict:
     return {}
 
 
+def smallest_resolution(name: str, scene) -> int:
+    """The coarsest resolution the scene allows: the micro-cantilever's grain boundaries hold a
+    particle (H/Δx ≥ H/gb_thickness); 1 for the others."""
+    if name == "microcantilever3d":
+        return math.ceil(scene.H / scene.gb_thickness - 1e-9)
+    return 1
+
+
 def resolution_for(name: str, scene, n_particles: int) -> int:
     """The resolution giving about ``n_particles``: the plate's closed form
     (:func:`plate_resolution`), else the particle count at :data:`PROBE_RESOLUTION` scaled by
     (N/N_probe)^(1/dim), corrected once more from the count at that resolution (the parts made of
-    whole layers — rc_beam's weight, plate and supports — do not scale as r^dim)."""
+    whole layers — rc_beam's weight, plate and supports — do not scale as r^dim), and at least
+    :func:`smallest_resolution`."""
     from sph import driver, particles
 
     if name == "plate":
@@ -130,7 +139,8 @@ def resolution_for(name: str, scene, n_particles: int) -> int:
     for _ in range(2):
         model, _ = driver.model_at(scene, r)
         n = particles.discretise(model, r).n
-        r_next = max(1, int(round(r * (n_particles / n) ** (1.0 / model.dim))))
+        r_next = max(smallest_resolution(name, scene),
+                     int(round(r * (n_particles / n) ** (1.0 / model.dim))))
         if r_next == r:
             break
         r = r_next

@@ -34,8 +34,8 @@ and stays within 10 % across the ladder under the crack band (rule ``regularised
 :data:`BAND`). The other gates are the
 checks the physics and the paper's robustness claim allow without a reference (:func:`gates`).
 2-D runs are plane strain (csph has no plane stress); ``--quick`` runs the 2-D variant at
-H/Δx = 5, the full run the scene's own dimension (3-D by default, with nodal integration,
-:data:`OPTIONS_3D`; gate 1 there against the 3-D FEM of :data:`FEM_RESOLUTIONS_3D`, a ladder of two
+H/Δx = 5, the full run the scene's own dimension (3-D by default, integration-consistent as in
+2-D, :data:`OPTIONS_3D`; gate 1 there against the 3-D FEM of :data:`FEM_RESOLUTIONS_3D`, a ladder of two
 hexahedral meshes, the finer at its elastic first point only; gates 2 and 5 need a 2-D ladder:
 ``--set dim=2``).
 """
@@ -84,25 +84,19 @@ MAX_OTHER_RESOLUTION = 10
 BAND = 1.0e-6
 """Crack-band width of the ``regularised`` rule, m: the grain-boundary thickness, one spacing at
 H/Δx = 5 (there ε_L is the paper's own)."""
-OPTIONS_3D = {"integration": "nodal"}
-"""csph options of 3-D runs. The integration-consistent correction (the default) gives this
-scene's 3-D body (the beam on a deeper, wider block) gradients about five times those of nodal
-integration (median |G| Δx 7.4 against 1.4 at H/Δx = 5) and a highest frequency 40 times higher:
-its critical step 2/ω_max (:mod:`sph.spectrum`) is 0.016 of the CFL estimate Δx/c_p at H/Δx = 5
-(ω_max = 7.6e11 rad/s), against 0.66 with nodal integration (1.8e10 rad/s) — 1.02 and 0.80 in 2-D.
-At dt_reference='spectrum', dt_factor = 0.9 the consistent run is stable before the first
-failure, but it takes 0.9·0.016/0.3 = 1/21 of the nodal run's step (about 2.1 million steps for
-the 5 µs of a run, an hour on one core against three minutes), and a step from the initial
-spectrum does not bound the cracked body's: in 2-D at 0.9 of Δt_crit the energy balance blows up
-after the first failures. Measured to 1.3 µs (inter, H/Δx = 5, 2 shared cores): the consistent run
-at 0.9·Δt_crit took 550 807 steps, 1033 s (1.9 ms a step), the nodal one at 0.3 of the CFL step
-26 529 steps, 65 s; both stable, first failure at 0.69 µs and 0.82 mN (consistent) against
-0.94 µs and 0.78 mN (nodal); elastic slope 10.5 against 7.3 kN/m, where the 3-D FEM (hex27, F-bar
-off, elastic step) gives 8.72 (H/h = 5) and 8.48 kN/m (H/h = 10), limit 8.27 at the singular
-order: the consistent correction is 27 % too stiff in 3-D at this resolution, nodal 12 % too
-soft. Nodal integration with the quadratic correction (``csph_quad``'s discretisation) at 0.3 of
-the CFL estimate stays the 3-D option; the consistent correction in 3-D remains an open
-problem."""
+OPTIONS_3D = {}
+"""csph options of 3-D runs: none — the integration-consistent correction, as in 2-D. It needs
+every face of the body on a lattice plane (:func:`sph.csph.off_lattice_share`); the scene's block
+reaches ``block_margin`` = 5 µm beyond the beam's side faces, which puts them there at every
+H/Δx. (With the block B/2 beyond them, as before, they fell half a spacing between the planes at
+odd H/Δx: the correction grew to ten times the gradients, the critical step to 0.016 of the CFL
+estimate, the elastic slope 27 % too stiff at H/Δx = 5, and the study ran nodal integration.)
+Measured at H/Δx = 5 (3-D, one thread): critical step 2/ω_max 0.87 of the CFL estimate Δx/c_p
+(nodal 0.66); static elastic slope 8.80 and 8.48 kN/m at H/Δx = 5 and 10, +5.7 and +1.8 % from
+the 3-D FEM's limit 8.33 kN/m (the FEM itself +5.4 and +2.6 %), nodal integration 7.78 and
+7.82 kN/m, −6.5 and −6.1 % (it hardly converges: the one-sided gradients at the faces are not
+integration-consistent); the dynamic runs (compression rule) are stable, their energy balance
+within 1.4e-3 (intra) and 2.1e-4 (inter) of the external work, 98 s and 63 s."""
 FEM_RESOLUTIONS = (5, 10, 20, 40)
 """Elements (9-node quadrilaterals, plane strain) across H of the FEM reference of a 2-D run; the
 smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5); the finest, 40, is the
@@ -120,12 +114,13 @@ FEM_RESOLUTIONS_3D = (5, 10)
 FEM_FULL_PATH_3D = (5,)
 """Gate 1 of the 3-D run (the default): the FEM of the same 3-D grains and boundaries (27-node
 hexahedra, J2 with Swift per element) at H/h = 5 along the whole static path to FEM_MAX·H (the
-csph slope window and the first failures: 950 elements, about 2 minutes on one core) and at H/h = 10
-at its first path point only, which is elastic (the slope: 8000 elements, 2.4e5 unknowns, about
-5 minutes, the sparse direct solve). The slope's limit is the two meshes' Richardson limit at
-:data:`SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is the 2-D corner
-extruded, the same exponent); a third mesh, H/h = 20 (64 000 elements), is beyond the run's
-budget, so the 3-D ladder has no observed order. Measured: 8.721 and 8.480 kN/m, limit 8.266."""
+csph slope window and the first failures: 1250 elements, about 2 minutes on one core) and at
+H/h = 10 at its first path point only, which is elastic (the slope: 10 000 elements, 2.5e5
+unknowns, about 8 minutes, the sparse direct solve). The slope's limit is the two meshes'
+Richardson limit at :data:`SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is
+the 2-D corner extruded, the same exponent); a third mesh, H/h = 20 (80 000 elements), is beyond
+the run's budget, so the 3-D ladder has no observed order. Measured: 8.778 and 8.538 kN/m, limit
+8.325."""
 FEM_STEP = 1e-3
 FEM_MAX = 0.02
 """The FEM's static path: the patch pushed down in steps of FEM_STEP·H to FEM_MAX·H (5 nm to

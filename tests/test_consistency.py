@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sph import consistency as cs
-from sph import csph, hpm
+from sph import csph, driver, hpm, particles
 from sph import total_lagrangian as tl
 from sph.particles import box
 from sph.static import Constraints, newton
@@ -159,6 +159,73 @@ def test_boundary_normals_rejects_bad_input():
         cs.boundary_normals(off, 0.5, lambda P: np.ones(len(P), bool))
     with pytest.raises(ValueError, match="order"):
         cs.boundary_normals(X, 0.5, lambda P: np.ones(len(P), bool), order=3)
+
+
+def _strict_box(lo, hi):
+    """Inside the open box (lo, hi): the sub-cell centres lie a quarter spacing from the nodes,
+    never on a face that lies on a lattice plane or half-way between two."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return lambda P: np.all((P > lo) & (P < hi), axis=1)
+
+
+def test_off_lattice_faces_are_the_boundary_between_lattice_planes():
+    """A box whose faces pass through nodes: share 0; the same nodes in a box reaching half a
+    spacing beyond them on every side (a cell lattice): 1; faces half a spacing off along z only:
+    the z faces' share of the area, 2·1·0.75 / (2·1·0.75 + 2·0.75·0.75 + 2·1·0.75) = 4/11."""
+    dx = 0.25
+    size = np.array([1.0, 0.75, 0.5])
+    X, _ = _grid((0.0, 0.0, 0.0), size, dx, "node")
+    assert cs.off_lattice_faces(X, dx, _strict_box(0 * size, size)) == 0.0
+    assert cs.off_lattice_faces(X, dx, _strict_box(-dx / 2 + 0 * size, size + dx / 2)) == 1.0
+    half = np.array([0.0, 0.0, dx / 2])
+    share = cs.off_lattice_faces(X, dx, _strict_box(-half, size + half))
+    assert abs(share - 4 / 11) < 1e-14, share
+
+
+@pytest.mark.parametrize("r", [5, 7])
+def test_microcantilever_3d_faces_on_the_lattice_and_a_well_posed_correction(r):
+    """The 3-D micro-cantilever's block reaches ``block_margin`` beyond the beam's side faces and the
+    lattice starts at the block's side face, so every face lies on a lattice plane at odd H/Δx
+    too: csph takes the integration-consistent correction, and it is a correction — the largest
+    change of a gradient below the largest gradient (0.15 measured; with the beam's side faces half
+    a spacing between planes, 10.8 at H/Δx = 5 and 17.6 at 7)."""
+    from workbench.scenes.fracture import MicroCantilever
+
+    sc = MicroCantilever()
+    model, _ = driver.model_at(sc, r)
+    ps = particles.discretise(model, r)
+    assert csph.off_lattice_share(ps) == 0.0
+    body = csph.CSPH(ps, crack="none")
+    assert body.integration == "consistent"
+    assert body.consistency["correction"] < 1.0, body.consistency["correction"]
+
+
+def test_faces_between_lattice_planes_take_nodal_integration():
+    """The same scene with the block reaching B/2 beyond the beam (its side faces half a spacing
+    between lattice planes at H/Δx = 5: a quarter of the boundary): 'auto' takes nodal
+    integration; 'consistent', asked for, is built and says so, and its correction is ill-posed
+    there — larger than the gradients it corrects (10.8 measured)."""
+    from workbench.scenes.fracture import MicroCantilever
+
+    sc = MicroCantilever(block_margin=MicroCantilever().B / 2)
+    model, _ = driver.model_at(sc, 5)
+    ps = particles.discretise(model, 5)
+    assert abs(csph.off_lattice_share(ps) - 0.25) < 1e-12
+    assert csph.CSPH(ps, crack="none").integration == "nodal"
+    forced = csph.CSPH(ps, integration="consistent", crack="none")
+    assert abs(forced.consistency["off_lattice_share"] - 0.25) < 1e-12
+    assert forced.consistency["correction"] > 1.0
+
+
+@pytest.mark.slow
+def test_microcantilever_3d_consistent_time_step():
+    """The highest frequency of the consistent 3-D micro-cantilever (H/Δx = 5) is that of a lattice
+    of its spacing: its critical step 2/ω_max at least half the CFL estimate Δx/c_p (0.87 measured,
+    nodal integration 0.66, the 2-D body 1.02; with the side faces between lattice planes 0.016)."""
+    from workbench.scenes.fracture import MicroCantilever
+
+    steps = driver.scene_time_steps("csph", MicroCantilever(), 5)
+    assert steps["dt_crit"] / steps["dt_cfl"] > 0.5, steps
 
 
 # ------------------------------------------------------------------------------------------------

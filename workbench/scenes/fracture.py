@@ -6,8 +6,12 @@ with the fixed block, finite-strain J2 with Swift hardening and the damage D = �
 inter-granular (ε_L = 0.002 on the grain boundaries) or intra-granular (in the grains) fracture.
 
 The paper gives no dimensions: our choices (parameters, ``--set`` changes them): a beam
-L × B × H = 20 × 5 × 5 µm on a block 5 µm long, 10 µm wide and 10 µm high (the beam's top flush
-with the block's), the block's back face and bottom face held; the load a downward velocity of the
+L × B × H = 20 × 5 × 5 µm on a block 5 µm long, 10 µm high (the beam's top flush with the
+block's) and 15 µm wide in 3-D (``block_margin`` = 5 µm beyond each side face of the beam: the
+particle lattice starts at the block's side face, so the beam's side faces lie on lattice lines at
+every H/Δx — with a margin of B/2 they fell half a spacing between lines at odd H/Δx, where the
+integration-consistent correction extrapolates to them and breaks down), the block's back face
+and bottom face held; the load a downward velocity of the
 top-face patch 2–4 µm from the free end (its ends on the lattice lines nearest to 0.8 L and 0.9 L:
 :meth:`MicroCantilever.patch_edges`), 0.2 m/s, ramped up over 0.5 µs (about five periods
 of the beam's first bending mode, ~0.1 µs: the kinetic energy stays below 1 % of the elastic
@@ -136,6 +140,8 @@ class MicroCantilever(Scene):
     H: float = param(5e-6, "m", "beam height", lo=0, lo_open=True)
     block: float = param(5e-6, "m", "length of the support block behind the beam", lo=0, lo_open=True)
     block_depth: float = param(5e-6, "m", "depth of the block below the beam", lo=0)
+    block_margin: float = param(5e-6, "m", "how far the block reaches beyond each side face of the "
+                                "beam (3-D)", lo=0)
     gb_thickness: float = param(1.0e-6, "m", "grain-boundary thickness (at least one particle "
                                 "spacing, below the grain size and H)", lo=0, lo_open=True)
     n_grains: int = param(5, "-", "grains along the beam, the Voronoi seed count (a positive integer)",
@@ -201,7 +207,8 @@ class MicroCantilever(Scene):
         top = self.H / 2
         bottom = -self.H / 2 - self.block_depth
         if self.dim == 3:
-            return Box((-self.block, -self.B, bottom), (0.0, self.B, top))
+            side = self.B / 2 + self.block_margin
+            return Box((-self.block, -side, bottom), (0.0, side, top))
         return Box((-self.block, bottom), (0.0, top))
 
     def limits(self, spacing: float) -> tuple[tuple[float, ...], float]:
