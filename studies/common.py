@@ -305,7 +305,7 @@ def validate(study, scene=None, solvers=None, resolutions=None, quick: bool = Fa
                                      else (resolutions or default)) for s in solvers}
         kept = solvers
     elif isinstance(getattr(study, "RESOLUTIONS", None), dict):
-        kept, lads = ladders(solvers, resolutions, study, quick)
+        kept, lads = ladders(solvers, resolutions, study, quick, scene)
     else:  # a study with fixed resolutions of its own (stability)
         kept, lads = solvers, {}
     for s, lad in lads.items():
@@ -315,19 +315,23 @@ def validate(study, scene=None, solvers=None, resolutions=None, quick: bool = Fa
 
 
 
-def ladders(solvers, resolutions, study, quick: bool) -> tuple[list, dict]:
+def ladders(solvers, resolutions, study, quick: bool, scene=None) -> tuple[list, dict]:
     """The solvers that run and each one's :func:`ladder`: a solver whose ladder is empty (a
     variant the quick ladder leaves out) is dropped; 'analytic' is kept (it has no ladder)."""
-    lads = {s: ladder(s, resolutions, study, quick) for s in solvers if s != "analytic"}
+    lads = {s: ladder(s, resolutions, study, quick, scene) for s in solvers if s != "analytic"}
     kept = [s for s in solvers if s == "analytic" or lads[s]]
     return kept, {s: lads[s] for s in kept if s != "analytic"}
 
 
-def ladder(solver: str, resolutions, study, quick: bool) -> list[int]:
+def ladder(solver: str, resolutions, study, quick: bool, scene=None) -> list[int]:
     """The resolutions ``solver`` runs at: ``resolutions`` may be None (the study's ladder, or its
-    quick ladder), a list (every discrete solver but the FEM reference, which keeps its own), or a
-    dict solver -> list."""
-    default = list((study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS).get(solver, ()))
+    quick ladder; for ``scene``, where the study's ladder depends on it: its
+    ``default_resolutions``), a list (every discrete solver but the FEM reference, which keeps its
+    own), or a dict solver -> list."""
+    table = study.QUICK_RESOLUTIONS if quick else study.RESOLUTIONS
+    if scene is not None and hasattr(study, "default_resolutions"):
+        table = study.default_resolutions(scene, quick)
+    default = list(table.get(solver, ()))
     if resolutions is None:
         return default
     if isinstance(resolutions, dict):

@@ -614,6 +614,14 @@ def _tolerance(r0: int, e0: float, r: int) -> float:
     return max(TOL_SLOPE, e0 * (2 * r0 / r) ** SINGULAR_ORDER)
 
 
+def default_resolutions(scene: MicroCantilever, quick: bool = False) -> dict:
+    """The ladder a run of ``scene`` takes when none is given: the quick one, the 2-D one
+    (:data:`RESOLUTIONS`) or the 3-D one (:data:`RESOLUTIONS_3D`)."""
+    if quick:
+        return QUICK_RESOLUTIONS
+    return RESOLUTIONS if scene.dim == 2 else {"csph": RESOLUTIONS_3D}
+
+
 def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, quick: bool = False,
         scheduler: str | None = None, fields=None, field_runs=None) -> xr.Dataset:
     """Run both cases under each failure rule at each resolution (``quick``: 2-D, the default
@@ -626,8 +634,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
             raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     if quick:
         scene = dataclasses.replace(scene, dim=QUICK_DIM)
-    default = (QUICK_RESOLUTIONS["csph"] if quick else
-               RESOLUTIONS["csph"] if scene.dim == 2 else RESOLUTIONS_3D)
+    default = default_resolutions(scene, quick)["csph"]
     if isinstance(resolutions, dict):
         resolutions = resolutions.get("csph", default)
     res = check_resolutions(resolutions or default)
@@ -651,11 +658,17 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     # (minutes, one core) in a process of its own while the particle runs go on
     fem3d = _Background(fem_ladder, scene, FEM_RESOLUTIONS_3D, FEM_MAX, FEM_FULL_PATH_3D) \
         if scene.dim == 3 else None
+    fem_failed = None
     try:
         outs = dict(zip(keys, run_tasks(tasks, scheduler, NAME)))
-        fem = fem3d.result() if fem3d is not None else fem_ladder(
-            scene, QUICK_FEM_RESOLUTIONS if quick else FEM_RESOLUTIONS,
-            FEM_MAX if quick else FEM_MAX_ROOT)
+        if fem3d is not None:
+            try:
+                fem = fem3d.result()
+            except BackgroundFailed as err:  # the particle runs are kept; gate 1 says why it has none
+                fem, fem_failed = None, str(err)
+        else:
+            fem = fem_ladder(scene, QUICK_FEM_RESOLUTIONS if quick else FEM_RESOLUTIONS,
+                             FEM_MAX if quick else FEM_MAX_ROOT)
     finally:
         if fem3d is not None:
             fem3d.close()
@@ -665,6 +678,8 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     # gate 6: the FEM with element deletion beside the particles (the full 2-D run)
     deletion = {c: fem_deletion(scene, c) for c in CASES} if scene.dim == 2 and not quick else None
     ds = dataset(scene, outs, rules, res, fem, static, deletion)
+    if fem_failed is not None:
+        ds.attrs["fem_reference_failed"] = f"3-D FEM ladder H/h = {FEM_RESOLUTIONS_3D}: {fem_failed}"
     if fields is not None:
         from pathlib import Path
 
@@ -678,20 +693,54 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
 
 class _Background:
     """``fn(*args)`` in a process of its own (spawned, daemonic: it ends with this one):
-    :meth:`result` waits for it, :meth:`close` ends it."""
+    :meth:`result` waits for it — or raises :class:`BackgroundFailed` (one line) when the process
+    ends without a result (killed for memory, say) or ``fn`` raised; :meth:`close` ends it."""
+
+    POLL = 1.0  # s between looks at whether the process is still there
 
     def __init__(self, fn, *args):
         import multiprocessing
 
-        self.pool = multiprocessing.get_context("spawn").Pool(1)
-        self.job = self.pool.apply_async(fn, args)
+        ctx = multiprocessing.get_context("spawn")
+        self.conn, child = ctx.Pipe(duplex=False)
+        self.process = ctx.Process(target=_background_call, args=(child, fn, args), daemon=True)
+        self.process.start()
+        child.close()
 
     def result(self):
-        return self.job.get()
+        while not self.conn.poll(self.POLL):  # a result, or the end of the pipe when it died
+            if not self.process.is_alive() and not self.conn.poll(0):
+                break
+        try:
+            ok, value = self.conn.recv()
+        except (EOFError, OSError):
+            self.process.join(10 * self.POLL)
+            code = self.process.exitcode
+            why = (f"killed by signal {-code}{': out of memory?' if code == -9 else ''}"
+                   if code is not None and code < 0 else f"exit status {code}")
+            raise BackgroundFailed(f"the process ended without a result ({why})") from None
+        if not ok:
+            raise BackgroundFailed(value)
+        return value
 
     def close(self):
-        self.pool.terminate()
-        self.pool.join()
+        if self.process.is_alive():
+            self.process.terminate()
+        self.process.join()
+        self.conn.close()
+
+
+class BackgroundFailed(RuntimeError):
+    """A :class:`_Background` job that gave no result (the reason, one line)."""
+
+
+def _background_call(conn, fn, args):
+    try:
+        conn.send((True, fn(*args)))
+    except Exception as err:  # the reason travels back; the study records it
+        conn.send((False, f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"))
+    finally:
+        conn.close()
 
 
 SERIES = {"load": ("load", "N", "force of the loading patch on the beam, downward (N/m in 2-D)"),
@@ -1169,6 +1218,9 @@ def gates(ds: xr.Dataset) -> list[Gate]:
     g = []
     if "fem_elastic_slope" in ds:
         g += fem_gates(ds)
+    if "fem_reference_failed" in ds.attrs:
+        g.append(Gate.expect("microcantilever gate 1's FEM reference", ds.attrs["fem_reference_failed"],
+                             "computed", "issue 11 gate 1 needs the FEM of the same grains"))
     if "static_first_failure_root_load" in ds:
         g += root_gates(ds)
     if "fracture_energy" in ds:
@@ -1554,8 +1606,11 @@ def cracked(ds: xr.Dataset, path):
                 ax.set_axis_off()
                 continue
             if X.shape[1] == 3:
+                # the lattice plane nearest the beam's mid-plane y = 0 (the lattice starts at the
+                # block's side face: at even particle counts across B the planes straddle y = 0)
                 dx = float(ds.attrs["param_H"]) / int(ds.particle_resolution.sel(case=case, rule=rule))
-                ok &= np.abs(X[:, 1]) <= 0.5 * dx
+                mid = X[ok, 1][np.argmin(np.abs(X[ok, 1]))]
+                ok &= np.abs(X[:, 1] - mid) <= 0.25 * dx
             up = X.shape[1] - 1
             col = np.array(["tab:gray" if names[r].startswith("gb") else
                             palette[int(names[r][5:]) % len(palette)] if r >= 0 else "w" for r in reg])

@@ -27,6 +27,25 @@ def test_grain_boundary_thinner_than_the_spacing():
     assert msg.startswith("gb_thickness:") and "spacing" in msg and "\n" not in msg
 
 
+@pytest.mark.parametrize("kw", [dict(block_margin=-1e-6)])
+def test_bad_block_margin(kw):
+    with pytest.raises(ParameterError) as err:
+        MicroCantilever(**kw)
+    assert str(err.value).startswith("block_margin:") and "allowed" in str(err.value)
+
+
+def test_a_run_is_validated_on_its_own_ladder():
+    """The checks before a run (resolutions, memory) take the ladder the run will take: the 3-D
+    one for the 3-D scene (the 2-D ladder's H/Δx = 20 in 3-D would need about 25 GB and was
+    refused), the 2-D one in 2-D."""
+    from studies import common, microcantilever as mc
+
+    _, lads = common.validate(mc, MicroCantilever())
+    assert lads == {"csph": list(mc.RESOLUTIONS_3D)}
+    _, lads = common.validate(mc, MicroCantilever(dim=2))
+    assert lads == {"csph": list(mc.RESOLUTIONS["csph"])}
+
+
 def test_cli_bad_input_exit_status(tmp_path, capsys):
     from workbench.app.cli import main
 
@@ -488,7 +507,38 @@ def test_background_process_returns_and_ends():
         assert job.result() == 5
     finally:
         job.close()
-    assert all(not p.is_alive() for p in job.pool._pool)
+    assert not job.process.is_alive()
+
+
+def test_background_process_that_dies_is_a_result_not_a_hang():
+    """A background job whose process is killed (as the kernel kills one for memory) or whose
+    function raises gives one line saying so, and the study records it as gate 1's failure
+    instead of waiting for ever; the particle runs are kept."""
+    import os
+    import signal
+    import time
+
+    import xarray as xr
+
+    from studies.microcantilever import BackgroundFailed, _Background, gates
+
+    job = _Background(time.sleep, 30.0)
+    try:
+        os.kill(job.process.pid, signal.SIGKILL)
+        with pytest.raises(BackgroundFailed, match="signal 9"):
+            job.result()
+    finally:
+        job.close()
+    job = _Background(int, "not a number")
+    try:
+        with pytest.raises(BackgroundFailed, match="^ValueError: invalid literal"):
+            job.result()
+    finally:
+        job.close()
+    ds = xr.Dataset(coords={"case": [], "rule": [], "resolution": []})
+    ds.attrs["fem_reference_failed"] = "3-D FEM ladder: the process ended without a result"
+    g = [x for x in gates(ds) if "FEM reference" in x.name]
+    assert len(g) == 1 and not g[0].passed
 
 
 @pytest.mark.parametrize("dim", [2, 3])
