@@ -62,9 +62,10 @@ outside LADDER_RULES stop at H/Δx = 10). Gate 5 takes the runs whose crack band
 spacing (:func:`band_ladder`: H/Δx = 10, 15, 20 with the 1 µm band; at 5 the band is one spacing
 and the regularised run is the ``compression`` one), so the ladder holds three of them."""
 RESOLUTIONS_3D = (5,)
-"""Particles across H of the 3-D run (the default): 1326 particles; both cases cut apart at about
-1.1 µs and stop 1.5 µs later (t_after), 54 k steps, 43 s (inter) and 51 s (intra) on one thread;
-H/Δx = 10 has eight times the particles and twice the steps."""
+"""Particles across H of the 3-D run (the default): 1776 particles; the cases cut apart at 1.36 µs
+(inter) and 1.04 µs (intra) and stop 1.5 µs later (t_after), 59 k and 52 k steps, 63 s and 98 s on
+one thread (integration-consistent, the other core busy); H/Δx = 10 has eight times the particles
+and twice the steps."""
 QUICK_RESOLUTIONS = {"csph": (5,)}
 QUICK_DIM = 2
 """``--quick``: the 2-D (plane-strain) variant at H/Δx = 5 — two runs of about 8 s each on one
