@@ -153,7 +153,7 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
                          "1e-6 dx)")
     signs, ins, faces = _exposed_faces(X, I, o, dx, inside)
     area = (0.5 * dx) ** (d - 1)
-    V = np.bincount(np.repeat(np.arange(N), 2 ** d)[ins], minlength=N) * (0.5 * dx) ** d
+    V = ins.reshape(N, 2 ** d).sum(axis=1) * (0.5 * dx) ** d  # inside sub-cells of each node
     n = np.zeros((N, d))
     for a, s, own, _ in faces:
         np.add.at(n[:, a], own, s * area)
