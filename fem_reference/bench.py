@@ -27,7 +27,7 @@ def newton_iteration_cost(resolutions) -> list[dict]:
     from workbench.scenes import Cantilever
 
     from .model import build
-    from .static import linear_solve
+    from workbench.linear_systems import direct_solve
 
     rows = []
     for n in resolutions:
@@ -49,7 +49,7 @@ def newton_iteration_cost(resolutions) -> list[dict]:
         t_asm = (time.perf_counter() - t0) / reps
         t0 = time.perf_counter()
         for _ in range(reps):
-            linear_solve(K, -pt["f_int"][disc.free] + 1.0)
+            direct_solve(K, -pt["f_int"][disc.free] + 1.0)
         t_sol = (time.perf_counter() - t0) / reps
         rows.append(dict(resolution=n, n_dof=disc.N, material_and_residual=t_mat,
                          tangent_assembly=t_asm, solve=t_sol))

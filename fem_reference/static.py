@@ -46,6 +46,7 @@ import scipy.sparse.linalg as spla
 
 from .assembly import Discretisation
 from .constitutive import embed, stored_energy_density, update
+from workbench.linear_systems import AMGPreconditioner, use_amg
 from workbench.materials import HIST_DAMAGE, Material, MaterialTable
 
 
@@ -300,15 +301,6 @@ class NewtonResult:
         return [b / a ** 2 for a, b in zip(r[:-1], r[1:]) if a < start and b > floor]
 
 
-def linear_solve(K, b):
-    """Sparse direct solve of K x = b (SuperLU, minimum-degree ordering on AᵀA+A, which suits the
-    structurally symmetric tangent). A CSR K is factorised as the CSC matrix Kᵀ without a copy and
-    solved with trans='T'."""
-    if sp.isspmatrix_csr(K):
-        return spla.splu(K.T, permc_spec="MMD_AT_PLUS_A").solve(b, trans="T")
-    return spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(b)
-
-
 class TangentSolver:
     """Solves the Newton systems K Δu = b of one run.
 
@@ -317,7 +309,20 @@ class TangentSolver:
     when GMRES has not reached the tolerance in ``max_krylov`` iterations. Newton asks for the
     forcing term η = min(1e-3, 0.1 ‖r‖/scale) (Eisenstat & Walker 1996): with η = O(‖r‖) the
     convergence stays quadratic while most factorisations of a load or time step are saved.
+
+    In 3-D above :data:`workbench.linear_systems.AMG_ABOVE` unknowns the systems are solved by a
+    Krylov method (CG for the symmetric standard element, GMRES for F-bar's unsymmetric tangent)
+    preconditioned by smoothed-aggregation AMG on the rigid-body modes of the free DOFs
+    (:meth:`~fem_reference.assembly.Discretisation.near_null_space`); the hierarchy is kept and
+    preconditions the next tangents until it no longer reaches the tolerance in
+    :data:`AMG_REUSE_ITERATIONS` iterations, when it is built again; where a fresh hierarchy fails
+    too, the system is factorised. :meth:`configure` (called by :func:`newton`) takes the
+    near-null space, dimension and symmetry from the problem.
     """
+
+    AMG_REUSE_ITERATIONS = 100
+    """Krylov iterations an old hierarchy may take on a new tangent before it is rebuilt (a fresh
+    one takes 50–100 at the sizes of the 3-D studies)."""
 
     def __init__(self, reuse: bool | None = None, reuse_above: int = 20000, rtol: float = 1e-11,
                  max_krylov: int = 12):
@@ -325,6 +330,18 @@ class TangentSolver:
         self.lu = None
         self.factorisations = 0
         self.krylov_iterations = 0
+        self.near_null, self.dim, self.symmetric = None, None, True
+        self.amg = None
+        self.amg_setups = 0
+        self.amg_iterations = 0
+
+    def configure(self, problem) -> None:
+        """Take the near-null space (a callable, evaluated at the first AMG build), dimension and
+        symmetry of ``problem``'s tangent, once per solver."""
+        if self.near_null is None:
+            disc = problem.disc
+            self.near_null, self.dim = disc.near_null_space, disc.d
+            self.symmetric = disc.fbar is None
 
     def _factor(self, K):
         self.factorisations += 1
@@ -336,10 +353,29 @@ class TangentSolver:
             lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A")
             self.lu = lu.solve
 
+    def _amg_solve(self, K, b, rtol):
+        """x by AMG-preconditioned Krylov, or None where a fresh hierarchy fails too."""
+        method = "cg" if self.symmetric else "gmres"
+        if self.amg is not None and self.amg.shape == K.shape:
+            x, ok, its = self.amg.solve(K, b, rtol, self.AMG_REUSE_ITERATIONS, method=method)
+            self.amg_iterations += its
+            if ok:
+                return x
+        B = self.near_null() if callable(self.near_null) else self.near_null
+        self.amg = AMGPreconditioner(K, B)
+        self.amg_setups += 1
+        x, ok, its = self.amg.solve(K, b, rtol, method=method)
+        self.amg_iterations += its
+        return x if ok else None
+
     def solve(self, K, b, rtol: float | None = None, near: bool = True):
         """x with ‖K x − b‖ ≤ rtol ‖b‖ (rtol defaults to the solver's own). ``near``: the tangent
         is close to the last factorised one (Newton near convergence), worth a Krylov try."""
         rtol = self.rtol if rtol is None else rtol
+        if self.near_null is not None and use_amg(K.shape[0], self.dim):
+            x = self._amg_solve(K, b, rtol)
+            if x is not None:
+                return x
         reuse = self.reuse if self.reuse is not None else K.shape[0] > self.reuse_above
         if reuse and near and self.lu is not None and self.shape == K.shape:
             M = spla.LinearOperator(K.shape, matvec=self.lu, dtype=float)
@@ -369,6 +405,7 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
     extra matrix included) — modified Newton: the tangent is neither assembled nor factorised;
     the residual is the full one, so the converged answer is the same (linear convergence)."""
     solver = TangentSolver() if solver is None else solver
+    solver.configure(problem)
     disc = problem.disc
     free = disc.free
     fext = problem.external(lam)
@@ -469,6 +506,7 @@ def linear_predictor(problem: Problem, state: State, lam: float,
     failure). None if the committed state cannot be evaluated."""
     disc = problem.disc
     solver = TangentSolver() if solver is None else solver
+    solver.configure(problem)
     pt = problem.evaluate(state.u, state, tangent=True)
     if not pt["ok"]:
         return None
@@ -476,7 +514,10 @@ def linear_predictor(problem: Problem, state: State, lam: float,
     du = np.zeros(disc.N)
     du[disc.fixed] = problem.prescribed(lam) - state.u[disc.fixed]
     rhs = problem.external(lam) - pt["f_int"] - disc.element_matvec(Ke, du)
-    du[disc.free] = solver.solve(problem.tangent(pt, Ke), rhs[disc.free], near=False)
+    K = problem.tangent(pt, Ke)
+    del Ke, pt  # the element matrices (1.8 GB at the 3-D micro-cantilever's H/h = 15) and the
+    # point tangents are not needed by the solve
+    du[disc.free] = solver.solve(K, rhs[disc.free], near=False)
     return state.u + du
 
 

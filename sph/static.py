@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse.linalg as spla
+from workbench.linear_systems import rigid_body_modes, solve_symmetric
 
 from .integrate import cfl_time_step
 from .total_lagrangian import Body, advance
@@ -71,7 +71,8 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             Kfp = K[free][:, fixed]
             rhs = rhs - Kfp @ dxp
         try:
-            du = solve_linear(Kff, rhs)
+            du = solve_linear(Kff, rhs, near_null=lambda: rigid_body_modes(x, free),
+                              dim=x.shape[1])
         except Exception:  # singular tangent
             return x, False, it
         if not np.all(np.isfinite(du)):
@@ -90,13 +91,17 @@ DENSE_BELOW = 3000
 second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
 
 
-def solve_linear(K, rhs) -> np.ndarray:
-    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, SuperLU above."""
+def solve_linear(K, rhs, near_null=None, dim: int = 3) -> np.ndarray:
+    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, above that
+    :func:`workbench.linear_systems.solve_symmetric` (SuperLU, or in 3-D above
+    :data:`~workbench.linear_systems.AMG_ABOVE` unknowns CG with an AMG hierarchy built on
+    ``near_null``, the rigid-body modes of the free DOFs, point-major, or a callable giving
+    them; ``dim``: the body's dimension)."""
     import scipy.linalg as sla
 
     if K.shape[0] < DENSE_BELOW:
         return sla.solve(K.toarray(), rhs, check_finite=False)
-    return spla.spsolve(K.tocsc(), rhs)
+    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim)
 
 
 def spacing(body: Body) -> float:

@@ -88,6 +88,28 @@ def test_plane_stress_cantilever_is_softer_by_one_minus_nu_squared():
     assert stress / strain == pytest.approx(1 / (1 - 0.3 ** 2), rel=1e-2)
 
 
+@pytest.mark.parametrize("mesh", [rectangle(0.16, 0.02, 2), block(1.0, 2)], ids=["quad2", "hex2"])
+def test_condensed_tangent_is_the_free_block_of_the_summed_element_matrices(mesh):
+    """The condensed tangent (the pattern from node blocks, each element entry's slot found in
+    it) equals scipy's sum of the element matrices over their DOFs, restricted to the free rows
+    and columns — pattern and values — with a third of the DOFs held."""
+    import scipy.sparse as sp
+
+    disc = Discretisation(mesh)
+    disc.set_fixed(np.arange(0, disc.N, 3))
+    rng = np.random.default_rng(1)
+    Ke = rng.standard_normal((disc.nel,) + (disc.edofs.shape[1],) * 2)
+    K = disc.assemble_elements(Ke)
+    nl = disc.edofs.shape[1]
+    rows = np.repeat(disc.edofs, nl, axis=1).ravel()
+    cols = np.tile(disc.edofs, (1, nl)).ravel()
+    ref = sp.csr_matrix((Ke.ravel(), (rows, cols)), shape=(disc.N, disc.N))[disc.free][:, disc.free]
+    ref.sort_indices()
+    K.sort_indices()
+    assert np.array_equal(K.indptr, ref.indptr) and np.array_equal(K.indices, ref.indices)
+    assert np.abs((K - ref).toarray()).max() <= TOL_SAME * np.abs(ref.toarray()).max()
+
+
 def test_reused_factors_give_the_same_path():
     """GMRES preconditioned by the last LU factors (the large-problem solver) follows the direct
     solver's Newton path: same iterations, same answer to the Newton tolerance."""
