@@ -165,6 +165,18 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
     assert ds.fem_load.attrs["units"] == "N" and ds.attrs["plane"] == "none (3-D)"
     assert any("FEM H/h=10" in g.name for g in gates(ds))
     assert "27-node hexahedra" in report_notes(ds)[0]
+    # with the static slope ladder of a 3-D run: its own gates, no root-region (2-D) ones
+    lim = part["slope_limit"]
+    static = {r: dict(elastic_slope=lim * (1 + 0.06 * (r / 5) ** -1.5), wall_time=1.0,
+                      status="ok", first_failure_root={}) for r in (5, 10, 15)}
+    ds = dataset(dataclasses.replace(MicroCantilever(), dim=3), {}, ["compression"], [5], part,
+                 static)
+    assert ds.static_elastic_slope.attrs["units"] == "N/m" and "static_root_error" not in ds
+    assert ds.attrs["static_slope_order"] == pytest.approx(1.5, rel=1e-9)
+    names = [g.name for g in gates(ds)]
+    assert any("observed order of the elastic slope" in n for n in names), names
+    assert any("csph static H/dx=15 (the finest)" in n for n in names), names
+    assert any("gate 1, static csph" in n for n in report_notes(ds))
 
 
 def test_csph_elastic_slope_against_the_fem(fem_quick):
@@ -234,6 +246,45 @@ def test_limit_spread_of_a_richardson_limit():
     assert np.isnan(limit_spread(res[:3], [1.0, 2.0, 1.5]))
 
 
+def test_observed_order_of_three_meshes_at_any_ratio():
+    """_order3: the order of values converging exactly as r^-p, for a constant ratio (closed
+    form) and for 5, 10, 15 (a root of the ratio equation); NaN where the differences change
+    sign or no positive order fits."""
+    from studies.microcantilever import _order3
+
+    for res in ((5, 10, 20), (5, 10, 15), (4, 7, 15)):
+        r = np.array(res, float)
+        for p in (0.6, 1.089, 2.0):
+            assert _order3(res, 3.0 + 2.0 * r ** -p) == pytest.approx(p, rel=1e-8), (res, p)
+    assert np.isnan(_order3((5, 10, 15), [1.0, 2.0, 1.5]))
+    assert np.isnan(_order3((5, 10, 15), [1.0, 1.5, 1.5000001]))  # Δ₁/Δ₂ beyond any order
+
+
+@pytest.mark.parametrize("errors,passed", [
+    ((0.0569, 0.0186, 0.0086), True),    # the 3-D measurement
+    ((0.0569, 0.0186, 0.012), False),    # the finest over the issue's 1 %
+    ((0.0098, 0.0097, 0.0096), False),   # within every bound but not converging: order 0.05
+    ((0.065, 0.061, 0.058), False),      # stagnating (nodal integration): order 0.1
+    ((0.13, 0.0186, 0.0086), False)])    # the coarsest beyond max(1 %, e_FEM(5)(10/5)^p)
+def test_static_slope_gates(errors, passed):
+    """The 3-D run's gate 1 on its static ladder: each slope within max(1 %, e(r)), the
+    observed order at least half the singular order, the finest within 1 % of a limit whose own
+    uncertainty is at most half of that."""
+    import xarray as xr
+
+    from studies.microcantilever import static_slope_gates
+
+    sr = [5, 10, 15]
+    ds = xr.Dataset(coords={"static_resolution": sr, "fem_resolution": [5, 10, 15]})
+    ds["static_slope_error"] = ("static_resolution", list(errors))
+    ds["fem_slope_error"] = ("fem_resolution", [0.0546, 0.0257, 0.0165])
+    ds.attrs["static_slope_order"] = float(np.polyfit(np.log(1 / np.array(sr)), np.log(errors), 1)[0])
+    ds.attrs["fem_slope_limit_spread"] = 0.00015
+    g = static_slope_gates(ds)
+    assert len(g) == 6
+    assert all(x.passed for x in g) == passed, [(x.name, x.observed, x.tolerance) for x in g]
+
+
 def test_static_ladder_reaches_the_finest_resolution():
     """Gate 2's static runs: the run's resolutions and STATIC_FINEST (40), whatever the ladder."""
     from studies.microcantilever import STATIC_FINEST, static_resolutions
@@ -277,7 +328,7 @@ def test_root_variables_on_their_own_coordinate():
     r^-1.5 read back 1.5; a run that has yielded at its first point has no slope (NaN)."""
     import xarray as xr
 
-    from studies.microcantilever import CASES, _root_variables, finest_gates
+    from studies.microcantilever import CASES, _root_variables, _static_variables, finest_gates
 
     sr = [5, 10, 20, 40]
     lim, slim = 180.0, 1.6e9
@@ -291,6 +342,7 @@ def test_root_variables_on_their_own_coordinate():
                root_error={c: np.array([0.1, 0.05]) for c in CASES},
                root_order={c: np.nan for c in CASES}, slope_limit=slim)
     ds = xr.Dataset(coords={"case": list(CASES), "fem_resolution": [5, 10]})
+    _static_variables(ds, fem, static)
     _root_variables(ds, fem, static)
     assert list(ds.static_resolution.values) == sr
     assert ds.static_root_error.sel(case="intra", static_resolution=40) == pytest.approx(
