@@ -274,8 +274,9 @@ class Discretisation:
         """The CSR pattern of the condensed tangent and the slot of every element-matrix entry in
         it (``_inv``, (nel·(nb·d)²,); slot nnz for an entry on a fixed row or column). Built from
         the node-to-node pattern, d × d blocks, by :func:`_condensed_rows`,
-        :func:`_condensed_columns` and :func:`_entry_slots`: no array of the element entries' keys is formed (at 27-node
-        hexahedra, H/h = 15 of the micro-cantilever, that took 18 GB)."""
+        :func:`_condensed_columns` and :func:`_entry_slots`: no array of the element entries'
+        keys is formed (at 27-node hexahedra, H/h = 15 of the micro-cantilever, that took
+        18 GB)."""
         d, nb = self.d, self.nb
         ns = self.N // d
         sd = self.sdofs

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from workbench.linear_systems import rigid_body_modes, solve_symmetric
 
 from .integrate import cfl_time_step

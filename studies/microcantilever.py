@@ -114,7 +114,7 @@ QUICK_FEM_RESOLUTIONS = (5, 10)
 """``--quick``: the two cheapest meshes (about 2 and 4 s)."""
 STATIC_RESOLUTIONS_3D = (5, 10, 15)
 """Gate 1's ladder of static csph elastic slopes in the 3-D run (the first point of the FEM's
-path, by Newton): 1776, 12 001 and 38 176 particles; about 5 s, 45 s and 5 minutes on one core,
+path, by Newton): 1776, 12 001 and 38 176 particles; 2 s, 41 s and 4.5 minutes on one core,
 4.1 GB at 15. The Newton systems above 20 000 unknowns are solved by AMG-preconditioned CG
 (:mod:`workbench.linear_systems`; the direct solve took 61 s per iteration at H/Δx = 10, where
 AMG-CG takes 16 s, and did not finish at 15). They run after the FEM ladder, so that the two
@@ -133,7 +133,7 @@ AMG-preconditioned CG, :mod:`workbench.linear_systems` — the direct solve took
 12.6 GB at 10). The slope's limit is the Richardson limit of the two finest at
 :data:`SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is the 2-D corner
 extruded, the same exponent); the three meshes observe the order. Measured: 8778.3, 8538.1 and
-8461.7 N/m; observed order 1.08 (the singular order 1.09); limit 8324.0 N/m (8325.0 from the
+8461.7 N/m; observed order 1.08 (the singular order 1.09); limit 8324.1 N/m (8325.0 from the
 5/10 pair)."""
 FEM_STEP = 1e-3
 FEM_MAX = 0.02

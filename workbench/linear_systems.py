@@ -2,7 +2,7 @@
 body on its free DOFs (:func:`sph.static.newton`, :class:`fem_reference.static.TangentSolver`).
 
 A direct solve (SuperLU) is exact and robust, but a 3-D tangent fills in: the particle tangent
-couples second neighbours (about 430 entries a row), the 27-node hexahedron's 375. At the 3-D
+couples second neighbours (about 430 entries a row), the 27-node hexahedron's up to 375. At the 3-D
 micro-cantilever's H/Δx = 10 (33 000 unknowns) one csph factorisation takes 61 s; the FEM's at
 H/h = 10 (250 000 unknowns) 12.6 GB. Above :data:`AMG_ABOVE` unknowns in 3-D the system is solved
 instead by conjugate gradients preconditioned with a smoothed-aggregation algebraic multigrid
