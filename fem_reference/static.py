@@ -46,7 +46,7 @@ import scipy.sparse.linalg as spla
 
 from .assembly import Discretisation
 from .constitutive import embed, stored_energy_density, update
-from workbench.linear_systems import AMGPreconditioner, use_amg
+from workbench.linear_systems import AMGPreconditioner, direct_factor, use_amg
 from workbench.materials import HIST_DAMAGE, Material, MaterialTable
 
 
@@ -346,12 +346,7 @@ class TangentSolver:
     def _factor(self, K):
         self.factorisations += 1
         self.shape = K.shape
-        if sp.isspmatrix_csr(K):
-            lu = spla.splu(K.T, permc_spec="MMD_AT_PLUS_A")
-            self.lu = lambda x: lu.solve(x, trans="T")
-        else:
-            lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A")
-            self.lu = lu.solve
+        self.lu = direct_factor(K)
 
     def _amg_solve(self, K, b, rtol):
         """x by AMG-preconditioned Krylov, or None where a fresh hierarchy fails too."""

@@ -97,12 +97,19 @@ class AMGPreconditioner:
         return x, ok, count[0]
 
 
-def direct_solve(K, b: np.ndarray) -> np.ndarray:
-    """SuperLU with the minimum-degree ordering on AᵀA + A (suits a structurally symmetric K); a
-    CSR K is factorised as the CSC matrix Kᵀ without a copy and solved with trans='T'."""
+def direct_factor(K):
+    """b ↦ K⁻¹ b by SuperLU with the minimum-degree ordering on AᵀA + A (suits a structurally
+    symmetric K), factorised once; a CSR K is factorised as the CSC matrix Kᵀ without a copy and
+    solved with trans='T'."""
     if sp.issparse(K) and K.format == "csr":
-        return spla.splu(K.T, permc_spec="MMD_AT_PLUS_A").solve(b, trans="T")
-    return spla.splu(sp.csc_matrix(K), permc_spec="MMD_AT_PLUS_A").solve(b)
+        lu = spla.splu(K.T, permc_spec="MMD_AT_PLUS_A")
+        return lambda b: lu.solve(b, trans="T")
+    return spla.splu(sp.csc_matrix(K), permc_spec="MMD_AT_PLUS_A").solve
+
+
+def direct_solve(K, b: np.ndarray) -> np.ndarray:
+    """K⁻¹ b by :func:`direct_factor`."""
+    return direct_factor(K)(b)
 
 
 def solve_symmetric(K, b: np.ndarray, near_null=None, dim: int = 3, rtol: float = RTOL,
