@@ -19,9 +19,9 @@ tolerance (the residual is the full nonlinear one) for a run that stays near its
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from .static import Problem, TangentSolver, commit, newton
+from workbench.linear_systems import direct_factor
 
 
 MAX_CUTS = 6
@@ -70,7 +70,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         r0 = r0 - damping * (M_full @ v)
     if np.any(r0[disc.free] != 0):
         M_ff = M_full[disc.free][:, disc.free].tocsc()
-        a[disc.free] = spla.splu(M_ff).solve(r0[disc.free])
+        a[disc.free] = direct_factor(M_ff)(r0[disc.free])
     c = 4.0 / dt ** 2
 
     t = [0.0]
@@ -86,7 +86,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     def effective(st, M_ff):
         """b ↦ (K₀ + (c + 2 damping/Δt) M_ff)⁻¹ b with the tangent at ``st``, factorised once."""
         K0 = problem.tangent(problem.evaluate(st.u, st, tangent=True))
-        return spla.splu((K0 + (c + 2.0 * damping / dt) * M_ff).tocsc()).solve
+        return direct_factor((K0 + (c + 2.0 * damping / dt) * M_ff).tocsr())
 
     iteration = effective(state, M_ff) if initial_tangent else None
     if snapshot is not None:

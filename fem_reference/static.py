@@ -46,8 +46,9 @@ import scipy.sparse.linalg as spla
 
 from .assembly import Discretisation
 from .constitutive import embed, stored_energy_density, update
-from workbench.linear_systems import AMGPreconditioner, direct_factor, use_amg
+from workbench.linear_systems import KeptHierarchy, direct_factor, use_amg
 from workbench.materials import HIST_DAMAGE, Material, MaterialTable
+from workbench.results import STOPPED
 
 
 @dataclass
@@ -314,15 +315,10 @@ class TangentSolver:
     Krylov method (CG for the symmetric standard element, GMRES for F-bar's unsymmetric tangent)
     preconditioned by smoothed-aggregation AMG on the rigid-body modes of the free DOFs
     (:meth:`~fem_reference.assembly.Discretisation.near_null_space`); the hierarchy is kept and
-    preconditions the next tangents until it no longer reaches the tolerance in
-    :data:`AMG_REUSE_ITERATIONS` iterations, when it is built again; where a fresh hierarchy fails
-    too, the system is factorised. :meth:`configure` (called by :func:`newton`) takes the
-    near-null space, dimension and symmetry from the problem.
+    preconditions the next tangents (:class:`workbench.linear_systems.KeptHierarchy`); where a
+    fresh hierarchy fails too, the system is factorised. :meth:`configure` (called by
+    :func:`newton`) takes the near-null space, dimension and symmetry from the problem.
     """
-
-    AMG_REUSE_ITERATIONS = 100
-    """Krylov iterations an old hierarchy may take on a new tangent before it is rebuilt (a fresh
-    one takes 50–100 at the sizes of the 3-D studies)."""
 
     def __init__(self, reuse: bool | None = None, reuse_above: int = 20000, rtol: float = 1e-11,
                  max_krylov: int = 12):
@@ -330,10 +326,8 @@ class TangentSolver:
         self.lu = None
         self.factorisations = 0
         self.krylov_iterations = 0
-        self.near_null, self.dim, self.symmetric = None, None, True
-        self.amg = None
-        self.amg_setups = 0
-        self.amg_iterations = 0
+        self.near_null, self.dim = None, None
+        self.amg = KeptHierarchy("cg")
 
     def configure(self, problem) -> None:
         """Take the near-null space (a callable, evaluated at the first AMG build), dimension and
@@ -341,34 +335,19 @@ class TangentSolver:
         if self.near_null is None:
             disc = problem.disc
             self.near_null, self.dim = disc.near_null_space, disc.d
-            self.symmetric = disc.fbar is None
+            self.amg.method = "cg" if disc.fbar is None else "gmres"
 
     def _factor(self, K):
         self.factorisations += 1
         self.shape = K.shape
         self.lu = direct_factor(K)
 
-    def _amg_solve(self, K, b, rtol):
-        """x by AMG-preconditioned Krylov, or None where a fresh hierarchy fails too."""
-        method = "cg" if self.symmetric else "gmres"
-        if self.amg is not None and self.amg.shape == K.shape:
-            x, ok, its = self.amg.solve(K, b, rtol, self.AMG_REUSE_ITERATIONS, method=method)
-            self.amg_iterations += its
-            if ok:
-                return x
-        B = self.near_null() if callable(self.near_null) else self.near_null
-        self.amg = AMGPreconditioner(K, B)
-        self.amg_setups += 1
-        x, ok, its = self.amg.solve(K, b, rtol, method=method)
-        self.amg_iterations += its
-        return x if ok else None
-
     def solve(self, K, b, rtol: float | None = None, near: bool = True):
         """x with ‖K x − b‖ ≤ rtol ‖b‖ (rtol defaults to the solver's own). ``near``: the tangent
         is close to the last factorised one (Newton near convergence), worth a Krylov try."""
         rtol = self.rtol if rtol is None else rtol
         if self.near_null is not None and use_amg(K.shape[0], self.dim):
-            x = self._amg_solve(K, b, rtol)
+            x = self.amg.solve(K, b, self.near_null, rtol)
             if x is not None:
                 return x
         reuse = self.reuse if self.reuse is not None else K.shape[0] > self.reuse_above
@@ -528,8 +507,10 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
     predicting each step by extrapolating the last converged increment (by
     :func:`linear_predictor` at the first step, after a deletion, and on a retry).
 
-    Calls ``callback(k, lam, state)`` when target k is reached. With ``problem.deletion``, failed
-    elements are deleted after every converged increment (:meth:`Problem.delete_failed`). Returns
+    Calls ``callback(k, lam, state)`` when target k is reached; a true return value stops the path
+    there (the later targets get the status :data:`workbench.results.STOPPED`). With
+    ``problem.deletion``, failed elements are deleted after every converged increment
+    (:meth:`Problem.delete_failed`). Returns
     (a list of dicts per target: lam, converged, status, residual_history (list of lists, one per
     increment), iterations, wall_time (cumulative, s), assembly_time, solve_time,
     newton_iterations, deleted (elements deleted while reaching this target); the final state).
@@ -541,13 +522,13 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
     prev = None  # (lam, u) of the previous converged increment
     out = []
     t_start = time.perf_counter()
-    failed = False
+    failed = stopped = False
     for k, target in enumerate(targets):
         rec = dict(lam=float(target), converged=False, status="", residual_history=[], iterations=0,
                    assembly_time=0.0, solve_time=0.0, newton_iterations=[],
                    deleted=np.zeros(0, dtype=np.int64))
-        if failed:
-            rec["status"] = "diverged: an earlier load failed"
+        if failed or stopped:
+            rec["status"] = "diverged: an earlier load failed" if failed else STOPPED
             rec["wall_time"] = np.nan
             out.append(rec)
             continue
@@ -598,6 +579,6 @@ def load_path(problem: Problem, targets, max_increment: float = np.inf, min_incr
             rec["converged"] = True
             rec["status"] = "ok"
             if callback is not None:
-                callback(k, lam, state)
+                stopped = bool(callback(k, lam, state))
         out.append(rec)
     return out, state

@@ -136,7 +136,9 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
     ParaView series ``<scene>_<method>_H<resolution>.pvd``; ``on_record(body, run, t)`` is called
     at every record of an explicit drive, t = 0 included, and at every equilibrium of a static
     one (t the load parameter), to look at the state in between (e.g.
-    :mod:`studies.stability_theory`); the other ``options`` go to the method's ``build``."""
+    :mod:`studies.stability_theory`) — a static path stops where it returns true (the later
+    values' status :data:`workbench.results.STOPPED`); the other ``options`` go to the method's
+    ``build``."""
     import dataclasses
 
     t0 = time.perf_counter()
@@ -330,12 +332,12 @@ class Run:
             out["iterations"][k] = its
             out["wall_time"][k] = time.perf_counter() - t_start
             its_at.append((k, its))
-            if on_record is not None:
-                on_record(self.body, self, lam)
+            stop = on_record is not None and on_record(self.body, self, lam)
             bar.update(1)
             if snap:
                 state["lam"] = lam
                 snap(k + 1)
+            return stop
 
         try:
             if tlb is None:

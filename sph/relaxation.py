@@ -46,6 +46,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from workbench.results import STOPPED
+
 TOL = 1e-4
 """Out-of-balance force over the force scale at which the relaxation stops (module docstring)."""
 CHECK_EVERY = 4
@@ -153,15 +155,16 @@ def relax_path(body, path, constraints_at, on_equilibrium=None, dt_factor: float
     ``dt_factor``. ``constraints_at(λ) -> (Constraints, x_target (N, d))`` as
     :func:`sph.static.solve_path` (its ``fixed`` and ``f_ext``); after each value
     ``on_equilibrium(k, λ, x, steps, force)`` with the force m a (N, d) on each particle (internal
-    plus dead: its negative is what the constraints exert). Returns one status per value: 'ok',
-    'not converged: …' (the later values 'not run: an earlier load failed'), 'diverged: …'."""
+    plus dead: its negative is what the constraints exert); a true return value stops the path
+    there. Returns one status per value: 'ok', 'not converged: …' (the later values 'not run: an
+    earlier load failed'), 'diverged: …', :data:`workbench.results.STOPPED`."""
     dt = body.time_step(dt_factor)
     spacing = body.particles.dx
     statuses = []
-    failed = False
+    failed = stopped = False
     for k, lam in enumerate(path):
-        if failed:
-            statuses.append("not run: an earlier load failed")
+        if failed or stopped:
+            statuses.append("not run: an earlier load failed" if failed else STOPPED)
             continue
         cons, x_target = constraints_at(float(lam))
         out = relax(body, cons.f_ext, cons.fixed, x_target, dt, spacing, tol, check_every,
@@ -177,5 +180,6 @@ def relax_path(body, path, constraints_at, on_equilibrium=None, dt_factor: float
             continue
         statuses.append("ok")
         if on_equilibrium is not None:
-            on_equilibrium(k, float(lam), body.x, out.steps, body.acc * body.m[:, None])
+            stopped = bool(on_equilibrium(k, float(lam), body.x, out.steps,
+                                          body.acc * body.m[:, None]))
     return statuses

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workbench.linear_systems import rigid_body_modes, solve_symmetric
+from workbench.linear_systems import KeptHierarchy, rigid_body_modes, solve_symmetric
+from workbench.results import STOPPED
 
 from .integrate import cfl_time_step
 from .total_lagrangian import Body, advance
@@ -36,7 +37,8 @@ ROUND_OFF = 1e-13
 
 
 def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndarray,
-           tol: float = 1e-8, max_iter: int = 30, force_scale: float | None = None):
+           tol: float = 1e-8, max_iter: int = 30, force_scale: float | None = None,
+           kept: KeptHierarchy | None = None):
     """Equilibrium f(x) + f_ext = 0 on the free DOFs with the fixed DOFs moved to
     ``x_target_fixed`` (N, d) (only its fixed entries are read), from the equilibrium ``x``.
 
@@ -45,8 +47,9 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
     applied load ‖f_ext‖ and the reaction ‖f_fixed‖ (so the criterion is relative whether the body
     is loaded by forces or by prescribed motion), or when the last correction was round-off
     (below :data:`ROUND_OFF` of the body's size; quadratic convergence has then run out of
-    digits). Returns (x_new, converged, iterations); the
-    body's trial history belongs to x_new (call ``body.commit()`` to accept)."""
+    digits). ``kept``: an AMG hierarchy kept across the systems of a path (:func:`solve_linear`).
+    Returns (x_new, converged, iterations); the body's trial history belongs to x_new (call
+    ``body.commit()`` to accept)."""
     fixed = cons.fixed.ravel()
     free = ~fixed
     x = x.copy()
@@ -73,7 +76,7 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             rhs = rhs - Kfp @ dxp
         try:
             du = solve_linear(Kff, rhs, near_null=lambda: rigid_body_modes(x, free),
-                              dim=x.shape[1])
+                              dim=x.shape[1], kept=kept)
         except Exception:  # singular tangent
             return x, False, it
         if not np.all(np.isfinite(du)):
@@ -92,17 +95,18 @@ DENSE_BELOW = 3000
 second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
 
 
-def solve_linear(K, rhs, near_null=None, dim: int = 3) -> np.ndarray:
+def solve_linear(K, rhs, near_null=None, dim: int = 3,
+                 kept: KeptHierarchy | None = None) -> np.ndarray:
     """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, above that
     :func:`workbench.linear_systems.solve_symmetric` (SuperLU, or in 3-D above
     :data:`~workbench.linear_systems.AMG_ABOVE` unknowns CG with an AMG hierarchy built on
     ``near_null``, the rigid-body modes of the free DOFs, point-major, or a callable giving
-    them; ``dim``: the body's dimension)."""
+    them, and kept in ``kept`` for the next systems; ``dim``: the body's dimension)."""
     import scipy.linalg as sla
 
     if K.shape[0] < DENSE_BELOW:
         return sla.solve(K.toarray(), rhs, check_finite=False)
-    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim)
+    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept)
 
 
 def spacing(body: Body) -> float:
@@ -162,16 +166,18 @@ def solve_path(body: Body, x: np.ndarray, path, constraints_at, on_equilibrium=N
     equilibrium; a failed increment is halved (at most 2^``max_cuts`` sub-steps, each committed);
     when that is exhausted, dynamic relaxation (``fallback='dr'``) or failure. ``method='dr'``
     uses dynamic relaxation alone (the cost comparison). After each value of the path
-    ``on_equilibrium(k, λ, x, iterations)`` is called. Returns one status per value
-    ('ok', 'ok (dynamic relaxation fallback)', 'diverged: …', 'not run: an earlier load failed')."""
+    ``on_equilibrium(k, λ, x, iterations)`` is called; a true return value stops the path there.
+    Returns one status per value ('ok', 'ok (dynamic relaxation fallback)', 'diverged: …',
+    'not run: an earlier load failed', :data:`workbench.results.STOPPED`)."""
     if method not in ("newton", "dr"):
         raise ValueError(f"static: {method!r} is not one of 'newton', 'dr'")
     statuses = []
     current = 0.0
-    failed = False
+    kept = KeptHierarchy()  # one AMG hierarchy for the path's systems, rebuilt where it misses
+    failed = stopped = False
     for k, lam in enumerate(path):
-        if failed:
-            statuses.append("not run: an earlier load failed")
+        if failed or stopped:
+            statuses.append("not run: an earlier load failed" if failed else STOPPED)
             continue
         steps = [float(lam)]
         status = "ok"
@@ -189,7 +195,7 @@ def solve_path(body: Body, x: np.ndarray, path, constraints_at, on_equilibrium=N
                 x, current = xn, target
                 steps.pop(0)
                 continue
-            xn, conv, it = newton(body, x, cons, x_target, tol=tol)
+            xn, conv, it = newton(body, x, cons, x_target, tol=tol, kept=kept)
             total_it += it
             if not conv and len(steps) < 2 ** max_cuts and abs(target - current) > 1e-6 * max(abs(lam), 1e-300):
                 steps.insert(0, current + 0.5 * (target - current))
@@ -209,5 +215,5 @@ def solve_path(body: Body, x: np.ndarray, path, constraints_at, on_equilibrium=N
             steps.pop(0)
         statuses.append(status)
         if not failed and on_equilibrium is not None:
-            on_equilibrium(k, float(lam), x, total_it)
+            stopped = bool(on_equilibrium(k, float(lam), x, total_it))
     return statuses

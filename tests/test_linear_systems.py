@@ -65,6 +65,25 @@ def test_amg_solves_what_the_direct_solver_solves(amg_everywhere):
     assert np.linalg.norm(x - x_direct) <= 1e-6 * np.linalg.norm(x_direct)
 
 
+def test_a_kept_hierarchy_serves_the_next_tangent_and_is_rebuilt_where_it_misses(amg_everywhere):
+    """KeptHierarchy: the hierarchy of the tube's tangent solves a nearby one (the tangent scaled
+    by 1.01 plus a small shift, as the next Newton tangent) without a new set-up, to the same
+    tolerance; a matrix it no longer fits (the shift into the spectrum's middle, where CG fails
+    within REUSE_ITERATIONS) costs a rebuild — and that fresh hierarchy failing too returns None
+    (the caller's direct solve)."""
+    problem = tube(3)
+    K = elastic_tangent(problem)
+    b = np.random.default_rng(1).standard_normal(K.shape[0])
+    kept = ls.KeptHierarchy()
+    nn = problem.disc.near_null_space
+    for Kn in (K, (1.01 * K + 1e-3 * float(K.diagonal().mean()) * sp.identity(K.shape[0])).tocsr()):
+        x = kept.solve(Kn, b, nn)
+        assert x is not None and np.linalg.norm(Kn @ x - b) <= 10 * ls.RTOL * np.linalg.norm(b)
+    assert kept.setups == 1
+    Kin = (K - 0.3 * float(K.diagonal().mean()) * sp.identity(K.shape[0])).tocsr()
+    assert kept.solve(Kin, b, nn) is None and kept.setups == 2
+
+
 def test_a_system_amg_cannot_solve_falls_back_to_the_direct_solve(amg_everywhere):
     """A strongly indefinite matrix (the tangent shifted by 0.3 of its mean diagonal, into the
     middle of its spectrum): CG does not reach the tolerance in its iterations, the direct solve
@@ -97,7 +116,7 @@ def test_fem_newton_path_is_the_same_with_amg(fbar, monkeypatch):
         assert all(r["status"] == "ok" for r in recs), recs
         out[amg] = (state.u, solver)
     (u0, s0), (u1, s1) = out[False], out[True]
-    assert s1.factorisations == 0 and s1.amg_setups >= 1 and s0.amg_setups == 0
+    assert s1.factorisations == 0 and s1.amg.setups >= 1 and s0.amg.setups == 0
     assert np.linalg.norm(u1 - u0) <= 1e-7 * np.linalg.norm(u0)
 
 

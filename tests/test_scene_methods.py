@@ -291,3 +291,25 @@ def test_cantilever_3d_every_method_agrees_with_timoshenko_and_the_others(cantil
             da, db = (float(cantilever[k]["tip_deflection"][0]) for k in (a, b))
             width = (max(-tol[a][0], tol[a][1]) + max(-tol[b][0], tol[b][1]))
             assert abs(da - db) <= width * C3D.timoshenko(C3D.loads[0]), (a, b, err)
+
+
+@pytest.mark.parametrize("method", ["csph", "sph"])
+def test_a_static_path_stops_where_its_caller_says(method):
+    """``on_record`` returning true ends a static path there, in Newton's path
+    (sph.static.solve_path) and dynamic relaxation's (sph.relaxation.relax_path; classic SPH has
+    no gradient form): the later load values are not run (NaN) and carry the status
+    workbench.results.STOPPED, not a failure."""
+    from workbench.results import STOPPED, path_ok
+    from workbench.scenes import Cantilever
+
+    seen = []
+
+    def on_record(body, run, lam):
+        seen.append(lam)
+        return len(seen) == 1
+
+    sc = Cantilever(loads=(0.2, 0.5, 1.0))
+    out = driver.solve(method, sc, 3, on_record=on_record)
+    assert out["status"] == ["ok", STOPPED, STOPPED] and all(path_ok(s) for s in out["status"])
+    assert len(seen) == 1 and np.isfinite(out["tip_deflection"][0])
+    assert np.all(np.isnan(out["tip_deflection"][1:]))

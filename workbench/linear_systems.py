@@ -97,6 +97,40 @@ class AMGPreconditioner:
         return x, ok, count[0]
 
 
+class KeptHierarchy:
+    """An AMG hierarchy kept across the nearby systems of one run — the tangents of successive
+    Newton iterations and load steps — by both Newton solvers (:func:`sph.static.solve_path`,
+    :class:`fem_reference.static.TangentSolver`). Each solve tries the last hierarchy first,
+    within :data:`REUSE_ITERATIONS`, and builds a new one where that misses (a tangent that has
+    moved away: plastic flow, large rotation). ``method``: 'cg' (symmetric tangents) or
+    'gmres'. Counts ``setups`` and ``iterations``."""
+
+    REUSE_ITERATIONS = 100
+    """Krylov iterations an old hierarchy may take on a new tangent before it is rebuilt (a fresh
+    one takes 50–100 at the sizes of the 3-D studies)."""
+
+    def __init__(self, method: str = "cg"):
+        self.method = method
+        self.amg = None
+        self.setups = 0
+        self.iterations = 0
+
+    def solve(self, K, b: np.ndarray, near_null, rtol: float = RTOL):
+        """x with ‖K x − b‖ ≤ rtol ‖b‖, or None where a fresh hierarchy misses too;
+        ``near_null`` as :func:`solve_symmetric`'s, taken only when a hierarchy is built."""
+        if self.amg is not None and self.amg.shape == K.shape:
+            x, ok, its = self.amg.solve(K, b, rtol, self.REUSE_ITERATIONS, method=self.method)
+            self.iterations += its
+            if ok:
+                return x
+        B = near_null() if callable(near_null) else near_null
+        self.amg = AMGPreconditioner(K, B)
+        self.setups += 1
+        x, ok, its = self.amg.solve(K, b, rtol, method=self.method)
+        self.iterations += its
+        return x if ok else None
+
+
 def direct_factor(K):
     """b ↦ K⁻¹ b by SuperLU with the minimum-degree ordering on AᵀA + A (suits a structurally
     symmetric K), factorised once; a CSR K is factorised as the CSC matrix Kᵀ without a copy and
@@ -113,16 +147,18 @@ def direct_solve(K, b: np.ndarray) -> np.ndarray:
 
 
 def solve_symmetric(K, b: np.ndarray, near_null=None, dim: int = 3, rtol: float = RTOL,
-                    stats: dict | None = None) -> np.ndarray:
+                    stats: dict | None = None, kept: KeptHierarchy | None = None) -> np.ndarray:
     """K⁻¹ b for a symmetric K: AMG-CG where :func:`use_amg` says so and ``near_null`` (the
     rigid-body modes, an array or a callable giving them) is given, SuperLU otherwise or when CG
-    fails. ``stats`` (a dict) collects 'amg_iterations', 'amg_failures' and 'direct' counts."""
+    fails. ``kept``: the run's :class:`KeptHierarchy` (default: a hierarchy of this K alone).
+    ``stats`` (a dict) collects 'amg_iterations', 'amg_failures' and 'direct' counts."""
     stats = {} if stats is None else stats
     if near_null is not None and use_amg(K.shape[0], dim):
-        B = near_null() if callable(near_null) else near_null
-        x, ok, its = AMGPreconditioner(K, B).solve(K, b, rtol)
-        stats["amg_iterations"] = stats.get("amg_iterations", 0) + its
-        if ok:
+        kept = KeptHierarchy() if kept is None else kept
+        before = kept.iterations
+        x = kept.solve(K, b, near_null, rtol)
+        stats["amg_iterations"] = stats.get("amg_iterations", 0) + kept.iterations - before
+        if x is not None:
             return x
         stats["amg_failures"] = stats.get("amg_failures", 0) + 1
     stats["direct"] = stats.get("direct", 0) + 1

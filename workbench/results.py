@@ -23,6 +23,16 @@ from . import __version__
 
 ENGINE = "netcdf4"
 
+STOPPED = "stopped: the caller's criterion was met"
+"""Status of the load values of a static path after its caller asked to stop (not run, and not a
+failure): both static solvers (``fem_reference.static.load_path``, ``sph.static.solve_path``)."""
+
+
+def path_ok(status: str) -> bool:
+    """Whether a static path value's status is a success: ``ok`` (possibly qualified, ``ok (…)``)
+    or :data:`STOPPED`."""
+    return status.startswith("ok") or status == STOPPED
+
 
 class OutputError(ValueError):
     """An output folder that cannot be written (one line: the folder and what failed)."""
