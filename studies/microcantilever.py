@@ -38,7 +38,8 @@ H/Δx = 5, the full run the scene's own dimension (3-D by default, integration-c
 2-D, :data:`OPTIONS_3D`; gate 1 there against the 3-D FEM of :data:`FEM_RESOLUTIONS_3D`, a ladder of three
 hexahedral meshes, the finer two at their elastic first point only, with csph's static elastic
 slopes on a ladder of their own, :data:`STATIC_RESOLUTIONS_3D` — the observed order and the 1 %
-at the finest (:func:`static_slope_gates`); gates 2 and 5 need a 2-D ladder: ``--set dim=2``).
+at the finest (:func:`static_slope_gates`); gates 2 and 5 need a 2-D ladder: ``--set dim=2``;
+gate 2 of the 3-D scene, hours on 2 cores, is :func:`root_ladder`, apart from the default run).
 """
 from __future__ import annotations
 
@@ -145,6 +146,16 @@ ROOT_STEP = 4e-3
 FEM_MAX_ROOT·H = 0.3 µm, past the first failure in the root region of both cases in both methods
 on every mesh (0.16–0.23 µm). The first-failure loads move by less than 0.07 % against steps of
 5 nm throughout (FEM, H/h = 5 and 10), at half the cost."""
+ROOT_STEP_3D = 4e-3
+"""The 3-D root path (:func:`root_path_3d`, the FEM ladder's and the static csph's in 3-D): the
+elastic first point FEM_STEP·H, then steps of ROOT_STEP_3D·H (20 nm) towards FEM_MAX_ROOT·H, each
+run stopped at the point where both cases have failed in the root region — a quarter of the
+points of the 2-D path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as much as the rest.
+Measured against that fine path (linear interpolation between points is second order in the
+step): the first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10 in 2-D, and
+by 0.06 % and 0.49 % at H/h = 5 in 3-D (intra fails there at 0.10 µm, 0.02 H, where the fine
+path's steps are a quarter as long) — the same on every mesh and in both methods, a fraction of
+gate 2's 3 %; steps twice as long move intra by 1.9 % in 3-D."""
 SINGULAR_ORDER = 2 * 0.5445
 """Order of convergence of the compliance (elastic slope) of a body with a re-entrant right-angle
 corner (the root of the beam on its block, and the edge of the rigidly moved patch): the stress
@@ -312,23 +323,57 @@ def static_path(scene: MicroCantilever, fem_max: float = FEM_MAX) -> np.ndarray:
     return scene.H * np.concatenate([fine, FEM_MAX + ROOT_STEP * np.arange(1, max(n, 0) + 1)])
 
 
+def root_path_3d(scene: MicroCantilever) -> np.ndarray:
+    """The deflections of the 3-D root path, m: FEM_STEP·H (elastic: the slope), then on in steps
+    of ROOT_STEP_3D·H up to FEM_MAX_ROOT·H (:data:`ROOT_STEP_3D`)."""
+    n = int(round((FEM_MAX_ROOT - FEM_STEP) / ROOT_STEP_3D))
+    return scene.H * (FEM_STEP + ROOT_STEP_3D * np.arange(n + 1))
+
+
+def _root_failed(damage_root: dict, k: int) -> bool:
+    """Whether every case's damage in the root region has reached 1 at path point k (a static
+    path that follows the root region's first failures stops there)."""
+    return all(damage_root[c][k] >= 1.0 for c in CASES)
+
+
+EDGE_CLEARANCE = 0.4
+"""The 3-D root region (:func:`root_region`) leaves out the points closer than EDGE_CLEARANCE·H
+(2 µm) to the re-entrant edges where the beam's side faces meet the block's face (x = 0,
+y = ±B/2: the block reaches ``block_margin`` beyond them), singular lines of the 3-D scene that
+the 2-D one does not have. With them in, the intra case failed first at their top end on every
+mesh (FEM, H/h = 5: at (0.11, −2.39, 2.39) µm) and its FEM load fell by 17 % from H/h = 5 to 10
+(0.725 to 0.599 mN), as at the patch's edges: no limit to check against. The first failure then
+lies where the clearance ends, in the edge's decaying near field (ρ^(λ−1)), sampled at points
+O(h) inside: 2 µm rather than 1 µm halves that field's gradient there (FEM, H/h = 5: intra fails
+at (1.5, −1.0, 2.39) µm, ρ = 2.1 µm; inter in the first grain boundary, 2.1 µm from the root,
+either way)."""
+
+
 def root_region(scene: MicroCantilever, X) -> np.ndarray:
     """(N,) bool: the points X (N, d), m, where gate 2 looks for the first failure — the tension
     half of the beam's root half, 0 ≤ x ≤ L/2 and above the mid-plane. It holds the largest
     bending stress (the root, whose top face runs on flush with the block's: a smooth surface)
     and none of the singular points: the edges of the rigidly moved patch (x = 0.8 L and 0.9 L
     on the top face), the re-entrant corner under the root (x = 0, bottom face), the corners of
-    the held faces (in the block, x < 0)."""
+    the held faces (in the block, x < 0); in 3-D none within EDGE_CLEARANCE·H of the re-entrant
+    edges of the side faces at the root (:data:`EDGE_CLEARANCE`)."""
     X = np.asarray(X)
-    return (X[:, 0] >= 0.0) & (X[:, 0] <= 0.5 * scene.L) & (X[:, -1] > 0.0)
+    inside = (X[:, 0] >= 0.0) & (X[:, 0] <= 0.5 * scene.L) & (X[:, -1] > 0.0)
+    if X.shape[1] == 3:
+        rho = np.hypot(X[:, 0], 0.5 * scene.B - np.abs(X[:, 1]))  # distance to the nearer edge
+        inside &= rho >= EDGE_CLEARANCE * scene.H * (1 - 1e-9)  # a lattice point at it is in
+    return inside
 
 
-def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX) -> dict:
-    """The FEM (9-node quadrilaterals, J2 with Swift per grain and boundary, the scene's plane)
-    of the scene at H/h = ``resolution`` along the static path of FEM_STEP·H up to fem_max·H:
-    ``deflection`` (m), ``load`` (N/m in 2-D, downward on the beam), ``damage`` {case: max over
-    the points of ε_p/ε_L of that case} and ``damage_root`` (the same over the points of
-    :func:`root_region`) per path point, ``eps_p_max``, ``status``, ``wall_time``."""
+def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX, path=None,
+               until_root_failure: bool = False) -> dict:
+    """The FEM (9-node quadrilaterals or 27-node hexahedra, J2 with Swift per grain and boundary,
+    the scene's plane) of the scene at H/h = ``resolution`` along the static path of FEM_STEP·H
+    up to fem_max·H (or along ``path``, m): ``deflection`` (m), ``load`` (N/m in 2-D, downward
+    on the beam), ``damage`` {case: max over the points of ε_p/ε_L of that case} and
+    ``damage_root`` (the same over the points of :func:`root_region`) per path point (NaN where
+    not reached), ``eps_p_max``, ``status``, ``wall_time``. ``until_root_failure``: stop once
+    every case has failed in the root region."""
     import time
 
     from fem_reference.model import discretise, observe
@@ -337,7 +382,7 @@ def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX
 
     t0 = time.perf_counter()
     h = scene.H / resolution
-    path = static_path(scene, fem_max)
+    path = static_path(scene, fem_max) if path is None else np.asarray(path, float)
     model = static_model(scene, h, path)
     fm = discretise(model, int(resolution))
     nqp = fm.disc.nqp
@@ -358,11 +403,11 @@ def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX
             D = ep / limits[c]
             out["damage"][c][k] = np.max(D)
             out["damage_root"][c][k] = np.max(D[root])
+        return until_root_failure and _root_failed(out["damage_root"], k)
 
     recs, _ = load_path(fm.problem, path, callback=record,
                         max_increment=float(np.max(np.diff(np.r_[0.0, path]))))
-    out["status"] = "ok" if all(r["status"] == "ok" for r in recs) else \
-        next(r["status"] for r in recs if r["status"] != "ok")
+    out["status"] = next((r["status"] for r in recs if not results.path_ok(r["status"])), "ok")
     out["wall_time"] = time.perf_counter() - t0
     out["n_elements"] = int(fm.disc.nel)
     return out
@@ -381,9 +426,12 @@ class _StaticScene:
         return {}
 
 
-def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX_ROOT) -> dict:
-    """csph (the study's 2-D options) on the static path of the FEM (:func:`static_model`, no
-    damage; Newton, :mod:`sph.static`) at H/Δx = ``resolution``: ``deflection``, ``load``,
+def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX_ROOT,
+                path=None, until_root_failure: bool = False) -> dict:
+    """csph (the study's options) on the static path of the FEM (:func:`static_model`, no
+    damage; Newton, :mod:`sph.static`) at H/Δx = ``resolution``, to fem_max·H (or along ``path``,
+    m; ``until_root_failure``: stopping once every case has failed in :func:`root_region`):
+    ``deflection``, ``load``,
     ``eps_p_max`` (over all particles) and ``damage_root`` {case: max of ε_p/ε_L over the
     particles of :func:`root_region`} per path point, ``first_failure_root`` {case: (deflection,
     load)}, ``elastic_slope`` (the secant at the first path point, as the FEM's; NaN where it
@@ -395,7 +443,7 @@ def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MA
 
     t0 = time.perf_counter()
     sc = dataclasses.replace(scene, band=0.0, name=f"{NAME}_static")
-    path = static_path(sc, fem_max)
+    path = static_path(sc, fem_max) if path is None else np.asarray(path, float)
     h = sc.H / resolution
     model = static_model(sc, h, path)
     seen = {}
@@ -412,11 +460,12 @@ def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MA
         seen["eps_p_max"].append(float(ep.max()))
         for c in CASES:
             seen["D"][c].append(float(np.max((ep / seen["limits"][c])[seen["root"]])))
+        return until_root_failure and _root_failed(seen["D"], len(seen["eps_p_max"]) - 1)
 
     out = driver.solve("csph", _StaticScene(sc, path), int(resolution), on_record=on_record,
                        **options_for(sc, "compression"))
     status = out["status"] if isinstance(out["status"], str) else \
-        next((s for s in out["status"] if s != "ok"), "ok")
+        next((s for s in out["status"] if not results.path_ok(s)), "ok")
     d, F = -np.asarray(out["deflection"]), -np.asarray(out["force"])
     D = {c: np.asarray(seen.get("D", {}).get(c, ()), float) for c in CASES}
     ff = {c: first_failure(d[:len(D[c])], F[:len(D[c])], D[c]) for c in CASES}
@@ -547,7 +596,7 @@ def csph_slope(d, F, t, t_first, window) -> float:
 
 
 def fem_ladder(scene: MicroCantilever, resolutions, fem_max: float = FEM_MAX,
-               full=None) -> dict:
+               full=None, root_path: bool = False) -> dict:
     """The FEM static runs at ``resolutions`` and what gate 1 needs: the elastic slope per mesh
     (the secant at the first path point, which is elastic), its Richardson limit, each mesh's
     error against it, the slope window of the csph curves (a quarter to all of the deflection at
@@ -559,18 +608,20 @@ def fem_ladder(scene: MicroCantilever, resolutions, fem_max: float = FEM_MAX,
     computed once per process (read only). ``full``: the resolutions that run the whole path
     (default: all); the others run its first point only, which is elastic — their slope, and NaN
     beyond it (the 3-D ladder, :data:`FEM_FULL_PATH_3D`); the window is then the finest full
-    run's."""
+    run's. ``root_path`` (the 3-D ladder): the first failures in the root region come from runs
+    along :func:`root_path_3d` at every resolution, each stopped once both cases have failed
+    there (``root_runs``); their first point gives the slope of the meshes not in ``full``."""
     base = dataclasses.replace(scene, case="inter", failure="compression", name=NAME,
                                dt_reference="cfl", dt_factor=0.3, band=0.0)
     res = tuple(sorted(int(r) for r in resolutions))
     full = res if full is None else tuple(sorted(int(r) for r in full))
-    return _fem_ladder(base, res, float(fem_max), full)
+    return _fem_ladder(base, res, float(fem_max), full, bool(root_path))
 
 
-def _first_point_only(scene: MicroCantilever, r: int, fem_max: float) -> dict:
-    """:func:`fem_static` at its first path point only, padded with NaN to the whole path's
-    length."""
-    run = fem_static(scene, r, FEM_STEP)
+def _first_point_only(scene: MicroCantilever, r: int, fem_max: float, run=None) -> dict:
+    """:func:`fem_static` at its first path point only (or the first point of ``run``, a run whose
+    path starts there), padded with NaN to the whole path's length."""
+    run = dict(fem_static(scene, r, FEM_STEP) if run is None else run)
     path = static_path(scene, fem_max)
 
     def pad(a):
@@ -584,10 +635,13 @@ def _first_point_only(scene: MicroCantilever, r: int, fem_max: float) -> dict:
 
 @functools.lru_cache(maxsize=4)
 def _fem_ladder(scene: MicroCantilever, res: tuple, fem_max: float = FEM_MAX,
-                full: tuple | None = None) -> dict:
+                full: tuple | None = None, root_path: bool = False) -> dict:
     res = list(res)
     full = res if full is None else list(full)
-    runs = {r: fem_static(scene, r, fem_max) if r in full else _first_point_only(scene, r, fem_max)
+    root_runs = {r: fem_static(scene, r, path=root_path_3d(scene), until_root_failure=True)
+                 for r in res} if root_path else None
+    runs = {r: fem_static(scene, r, fem_max) if r in full else
+            _first_point_only(scene, r, fem_max, None if root_runs is None else root_runs[r])
             for r in res}
     slopes = np.array([runs[r]["load"][0] / runs[r]["deflection"][0]
                        if runs[r]["eps_p_max"][0] == 0 else np.nan for r in res])
@@ -597,10 +651,11 @@ def _fem_ladder(scene: MicroCantilever, res: tuple, fem_max: float = FEM_MAX,
     limit = fem_slope_limit(res, slopes) if len(res) >= 2 else np.nan
     ff = {c: np.array([first_failure(runs[r]["deflection"], runs[r]["load"], runs[r]["damage"][c])
                        for r in res]) for c in CASES}
-    fr = {c: np.array([first_failure(runs[r]["deflection"], runs[r]["load"],
-                                     runs[r]["damage_root"][c]) for r in res]) for c in CASES}
+    rr = runs if root_runs is None else root_runs
+    fr = {c: np.array([first_failure(rr[r]["deflection"], rr[r]["load"], rr[r]["damage_root"][c])
+                       for r in res]) for c in CASES}
     root_limit = {c: fem_slope_limit(res, fr[c][:, 1]) if len(res) >= 2 else np.nan for c in CASES}
-    return dict(resolutions=res, runs=runs, slopes=slopes, slope_limit=limit,
+    return dict(resolutions=res, runs=runs, root_runs=root_runs, slopes=slopes, slope_limit=limit,
                 slope_error=np.abs(slopes - limit) / abs(limit),
                 slope_limit_spread=limit_spread(res, slopes),
                 root_limit_spread={c: limit_spread(res, fr[c][:, 1]) for c in CASES},
@@ -706,7 +761,8 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
         if fem3d is not None:
             fem3d.close()
     # gate 2's csph: the static runs on the FEM's path (the full 2-D run); in 3-D the ladder of
-    # elastic slopes, gate 1's observed order
+    # elastic slopes, gate 1's observed order (the root region's first failures in 3-D:
+    # root_ladder_3d, hours on 2 cores)
     if quick:
         static = None
     elif scene.dim == 2:
@@ -727,6 +783,22 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
                    if t.writes_fields]
         ds.attrs["field_series"] = ", ".join(n for n in written if (Path(fields) / n).exists())
     return ds
+
+
+def root_ladder(scene: MicroCantilever | None = None,
+                resolutions=FEM_RESOLUTIONS_3D) -> xr.Dataset:
+    """Gate 2 of the 3-D scene, apart from the default run: the FEM ladder (27-node hexahedra in
+    3-D) and static csph at the same ``resolutions`` along :func:`root_path_3d`, each stopped at
+    the root region's last first failure, in a dataset without particle runs whose :func:`gates`
+    are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
+    :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
+    path takes about 15 minutes and csph's 19, at 15 each over an hour (14 and 2.5 GB)."""
+    scene = scene or SCENE()
+    res = tuple(sorted(int(r) for r in resolutions))
+    fem = fem_ladder(scene, res, FEM_MAX, res[:1], root_path=True)
+    static = {r: csph_static(scene, r, path=root_path_3d(scene), until_root_failure=True)
+              for r in res}
+    return dataset(scene, {}, ["compression"], [res[0]], fem, static)
 
 
 class _Background:
@@ -938,6 +1010,10 @@ def run_summary(out: dict, scene: MicroCantilever, resolution: int | None = None
     return s
 
 
+PLANE_3D = "none (3-D)"
+"""The dataset's ``plane`` attribute in 3-D."""
+
+
 def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
             static: dict | None = None, deletion: dict | None = None) -> xr.Dataset:
     """The study's dataset from the runs ``outs`` {(case, rule, resolution): driver output} and
@@ -1000,12 +1076,12 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
                                                            "particles across H"}),
               "time": ("time", time, {"units": "s"}), "part": list(FAILED)}
     ds = xr.Dataset(data, coords=coords)
-    ds.attrs["plane"] = "strain" if scene.dim == 2 else "none (3-D)"
+    ds.attrs["plane"] = "strain" if scene.dim == 2 else PLANE_3D
     if fem is not None:
         _fem_variables(ds, fem, outs, rules, res)
         if static:
             _static_variables(ds, fem, static)
-            if scene.dim == 2:
+            if all("first_failure_root" in o for o in static.values()):
                 _root_variables(ds, fem, static)
     if deletion:
         _deletion_variables(ds, deletion)
@@ -1079,16 +1155,17 @@ def _static_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
 
 
 def _root_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
-    """Gate 2's variables (2-D): the first failure in :func:`root_region` of the FEM ladder (load,
+    """Gate 2's variables: the first failure in :func:`root_region` of the FEM ladder (load,
     deflection, Richardson limit and its uncertainty, each mesh's error) and of the static csph
     runs ``static`` on ``static_resolution`` (:func:`_static_variables`: load, deflection, error
     against the FEM's limit, and that error's observed order)."""
+    force = "N" if _is_3d(ds) else "N/m"
     fr = np.array([fem["first_failure_root"][c] for c in CASES])  # (case, fem_resolution, 2)
     ds["fem_first_failure_root_deflection"] = (("case", "fem_resolution"), fr[..., 0], {"units": "m"})
     ds["fem_first_failure_root_load"] = (("case", "fem_resolution"), fr[..., 1], {
-        "units": "N/m", "long_name": "FEM load at the first failure in the root region (gate 2)"})
+        "units": force, "long_name": "FEM load at the first failure in the root region (gate 2)"})
     ds["fem_root_limit"] = (("case",), np.array([fem["root_limit"][c] for c in CASES]), {
-        "units": "N/m", "long_name": "its Richardson limit at the singular order"})
+        "units": force, "long_name": "its Richardson limit at the singular order"})
     ds["fem_root_limit_spread"] = (("case",), np.array([fem["root_limit_spread"][c] for c in CASES]), {
         "units": "-", "long_name": "that limit's uncertainty: |limit at the singular order - limit "
                                    "at the observed order| / limit"})
@@ -1100,7 +1177,7 @@ def _root_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
     ds["static_first_failure_root_deflection"] = (("case", "static_resolution"), cs[..., 0],
                                                   {"units": "m"})
     ds["static_first_failure_root_load"] = (("case", "static_resolution"), cs[..., 1], {
-        "units": "N/m", "long_name": "csph (static, no damage) load at the first failure in the "
+        "units": force, "long_name": "csph (static, no damage) load at the first failure in the "
                                     "root region (gate 2)"})
     lim = ds.fem_root_limit.values[:, None]
     ds["static_root_error"] = (("case", "static_resolution"), np.abs(cs[..., 1] / lim - 1), {
@@ -1121,7 +1198,8 @@ def _fem_variables(ds: xr.Dataset, fem: dict, outs: dict, rules, res) -> None:
     force = "N/m" if plane else "N"
     ds.coords["fem_resolution"] = ("fem_resolution", np.array(fr), {
         "units": "-", "long_name": "elements across H (9-node quadrilaterals)" if plane else
-        "elements across H (27-node hexahedra; beyond the coarsest, the first path point only)"})
+        "elements across H (27-node hexahedra; beyond the coarsest the root path only: "
+        "fem_load its first point)"})
     ds.coords["fem_deflection"] = ("fem_deflection", d, {"units": "m"})
     data = {}
     data["fem_load"] = (("fem_resolution", "fem_deflection"),
@@ -1271,10 +1349,11 @@ def gates(ds: xr.Dataset) -> list[Gate]:
     if "fem_reference_failed" in ds.attrs:
         g.append(Gate.expect("microcantilever gate 1's FEM reference", ds.attrs["fem_reference_failed"],
                              "computed", "issue 11 gate 1 needs the FEM of the same grains"))
-    if "static_first_failure_root_load" in ds:
-        g += root_gates(ds)
-    elif "static_elastic_slope" in ds and "fem_elastic_slope" in ds:
+    three_d = _is_3d(ds)
+    if three_d and "static_elastic_slope" in ds and "fem_elastic_slope" in ds:
         g += static_slope_gates(ds)
+    if "static_first_failure_root_load" in ds:
+        g += root_gates(ds, slope=not three_d)
     if "fracture_energy" in ds:
         g += band_gates(ds)
     for case, rule, r, sel in _runs(ds):
@@ -1332,11 +1411,16 @@ def root_tolerance(ds: xr.Dataset, case: str, r: int) -> float:
     return max(TOL_FIRST_FAILURE, e0 * (2 * r0 / r) ** SINGULAR_ORDER)
 
 
-def root_gates(ds: xr.Dataset) -> list[Gate]:
+def _is_3d(ds: xr.Dataset) -> bool:
+    return ds.attrs.get("plane") == PLANE_3D
+
+
+def root_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
     """Gate 2 (the issue's gate 1, its second half): the FEM's first-failure load in the root
     region converged on its own ladder (its Richardson error on the finest mesh at most half the
     smallest tolerance it checks), and the static csph's within root_tolerance at each
-    resolution; then :func:`finest_gates`."""
+    resolution; then :func:`finest_gates` (``slope``: with the elastic slope's, which the 3-D run
+    has from :func:`static_slope_gates`)."""
     g = []
     fr = [int(r) for r in ds.fem_resolution.values]
     res = [int(r) for r in ds.static_resolution.values]
@@ -1356,17 +1440,18 @@ def root_gates(ds: xr.Dataset) -> list[Gate]:
                 root_tolerance(ds, case, r),
                 "issue 11 gate 1: max(3 %, the FEM's own error at the same nodal spacing at the "
                 "singular order)"))
-    return g + finest_gates(ds)
+    return g + finest_gates(ds, slope)
 
 
-def finest_gates(ds: xr.Dataset) -> list[Gate]:
+def finest_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
     """Gate 1 at the finest resolution, the issue's bounds as written: the static csph run at the
-    finest H/Δx (:data:`STATIC_FINEST`) has its elastic slope within TOL_SLOPE (1 %) and each
-    case's load at the first failure in the root region within TOL_FIRST_FAILURE (3 %) of the
-    FEM's Richardson limits; each limit's own uncertainty (:func:`limit_spread`) at most
-    FEM_SHARE of the bound it serves (NaN, so failing, below three meshes)."""
+    finest H/Δx (:data:`STATIC_FINEST` in 2-D, the last of :data:`STATIC_RESOLUTIONS_3D` in 3-D)
+    has its elastic slope within TOL_SLOPE (1 %; ``slope``) and each case's load at the first
+    failure in the root region within TOL_FIRST_FAILURE (3 %) of the FEM's Richardson limits;
+    each limit's own uncertainty (:func:`limit_spread`) at most FEM_SHARE of the bound it serves
+    (NaN, so failing, below three meshes)."""
     r = int(ds.static_resolution.values.max())
-    g = finest_slope_gates(ds)
+    g = finest_slope_gates(ds) if slope else []
     for case in ds.case.values:
         g.append(Gate.at_most(
             f"microcantilever {case} FEM: the uncertainty of the root region's first-failure "
@@ -1467,7 +1552,8 @@ def report_notes(ds: xr.Dataset) -> list[str]:
         fr = [int(r) for r in ds.fem_resolution.values]
         f_unit = ds.fem_load.attrs.get("units", "N/m")
         kind = ("plane strain, Q9" if ds.attrs.get("plane", "strain") == "strain" else
-                "3-D, 27-node hexahedra, beyond the coarsest at the first, elastic path point only")
+                "3-D, 27-node hexahedra; beyond the coarsest along the root path to the root "
+                "region's first failures")
         notes.append(
             f"FEM reference ({kind}, J2 with Swift per grain and boundary, static): elastic "
             "slope " + ", ".join(f"{float(v):.5g} (H/h = {r})" for r, v in
@@ -1506,13 +1592,14 @@ def report_notes(ds: xr.Dataset) -> list[str]:
     if "static_first_failure_root_load" in ds:
         fr = [int(r) for r in ds.fem_resolution.values]
         sr = ds.static_resolution.values
+        unit = ds.fem_root_limit.attrs.get("units", "N/m")
         for case in ds.case.values:
             f = ds.fem_first_failure_root_load.sel(case=case).values
             c = ds.static_first_failure_root_load.sel(case=case).values
             notes.append(
                 f"gate 2 (first failure in the root region: 0 <= x <= L/2, upper half), {case}: FEM "
                 + ", ".join(f"{v:.4g} (H/h = {r})" for r, v in zip(fr, f))
-                + f" N/m, limit {float(ds.fem_root_limit.sel(case=case)):.4g} (observed order "
+                + f" {unit}, limit {float(ds.fem_root_limit.sel(case=case)):.4g} (observed order "
                 f"{float(ds.fem_root_order.sel(case=case)):.3g}; the limit's uncertainty "
                 f"{100 * float(ds.fem_root_limit_spread.sel(case=case)):.2f} %); csph static "
                 + ", ".join(f"{v:.4g} (H/dx = {int(r)}, {100 * float(e):.2f} %, tolerance "
@@ -1524,7 +1611,7 @@ def report_notes(ds: xr.Dataset) -> list[str]:
             ok = np.isfinite(c)
             if ok.sum() >= 2:  # csph's own Richardson limit, from its two finest, beside the FEM's
                 lim = fem_slope_limit(sr[ok], c[ok])
-                notes[-1] += (f" csph's own limit (two finest, singular order) {lim:.4g} N/m, "
+                notes[-1] += (f" csph's own limit (two finest, singular order) {lim:.4g} {unit}, "
                               f"{100 * (lim / float(ds.fem_root_limit.sel(case=case)) - 1):+.2f} % "
                               f"from the FEM's.")
     if "fracture_energy" in ds:
