@@ -608,7 +608,7 @@ def fem_ladder(scene: MicroCantilever, resolutions, fem_max: float = FEM_MAX,
     computed once per process (read only). ``full``: the resolutions that run the whole path
     (default: all); the others run its first point only, which is elastic — their slope, and NaN
     beyond it (the 3-D ladder, :data:`FEM_FULL_PATH_3D`); the window is then the finest full
-    run's. ``root_path`` (the 3-D ladder): the first failures in the root region come from runs
+    run's. ``root_path`` (:func:`root_ladder`): the first failures in the root region come from runs
     along :func:`root_path_3d` at every resolution, each stopped once both cases have failed
     there (``root_runs``); their first point gives the slope of the meshes not in ``full``."""
     base = dataclasses.replace(scene, case="inter", failure="compression", name=NAME,
