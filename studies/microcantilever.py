@@ -762,7 +762,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
             fem3d.close()
     # gate 2's csph: the static runs on the FEM's path (the full 2-D run); in 3-D the ladder of
     # elastic slopes, gate 1's observed order (the root region's first failures in 3-D:
-    # root_ladder_3d, hours on 2 cores)
+    # root_ladder, hours on 2 cores)
     if quick:
         static = None
     elif scene.dim == 2:
@@ -1081,7 +1081,7 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
         _fem_variables(ds, fem, outs, rules, res)
         if static:
             _static_variables(ds, fem, static)
-            if all("first_failure_root" in o for o in static.values()):
+            if scene.dim == 2 or fem.get("root_runs") is not None:  # 3-D: root_ladder's
                 _root_variables(ds, fem, static)
     if deletion:
         _deletion_variables(ds, deletion)
@@ -1198,8 +1198,8 @@ def _fem_variables(ds: xr.Dataset, fem: dict, outs: dict, rules, res) -> None:
     force = "N/m" if plane else "N"
     ds.coords["fem_resolution"] = ("fem_resolution", np.array(fr), {
         "units": "-", "long_name": "elements across H (9-node quadrilaterals)" if plane else
-        "elements across H (27-node hexahedra; beyond the coarsest the root path only: "
-        "fem_load its first point)"})
+        "elements across H (27-node hexahedra; beyond the coarsest, the first path point only"
+        + (" of the root path)" if fem.get("root_runs") is not None else ")")})
     ds.coords["fem_deflection"] = ("fem_deflection", d, {"units": "m"})
     data = {}
     data["fem_load"] = (("fem_resolution", "fem_deflection"),
@@ -1552,8 +1552,9 @@ def report_notes(ds: xr.Dataset) -> list[str]:
         fr = [int(r) for r in ds.fem_resolution.values]
         f_unit = ds.fem_load.attrs.get("units", "N/m")
         kind = ("plane strain, Q9" if ds.attrs.get("plane", "strain") == "strain" else
-                "3-D, 27-node hexahedra; beyond the coarsest along the root path to the root "
-                "region's first failures")
+                "3-D, 27-node hexahedra, beyond the coarsest at the first, elastic path point only"
+                + (" (and along the root path to the root region's first failures)"
+                   if "fem_first_failure_root_load" in ds else ""))
         notes.append(
             f"FEM reference ({kind}, J2 with Swift per grain and boundary, static): elastic "
             "slope " + ", ".join(f"{float(v):.5g} (H/h = {r})" for r, v in

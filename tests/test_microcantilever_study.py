@@ -165,25 +165,33 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
     assert ds.fem_load.attrs["units"] == "N" and ds.attrs["plane"] == "none (3-D)"
     assert any("FEM H/h=10" in g.name for g in gates(ds))
     assert "27-node hexahedra" in report_notes(ds)[0]
-    # with the static ladder of a 3-D run: the slope's gates and the root region's, in N, each
-    # gate of the finest once
+    # with the static slope ladder of the default 3-D run: its own gates, no root-region ones
     lim = part["slope_limit"]
     static = {r: dict(elastic_slope=lim * (1 + 0.06 * (r / 5) ** -1.5), wall_time=1.0,
-                      status="ok", first_failure_root={c: (2e-7, 1e-3) for c in CASES})
+                      status="ok", first_failure_root={c: (np.nan, np.nan) for c in CASES})
               for r in (5, 10, 15)}
-    ds = dataset(dataclasses.replace(MicroCantilever(), dim=3), {}, ["compression"], [5], part,
-                 static)
-    assert ds.static_elastic_slope.attrs["units"] == "N/m"
-    assert ds.static_first_failure_root_load.attrs["units"] == "N"
+    three_d = dataclasses.replace(MicroCantilever(), dim=3)
+    ds = dataset(three_d, {}, ["compression"], [5], part, static)
+    assert ds.static_elastic_slope.attrs["units"] == "N/m" and "static_root_error" not in ds
     assert ds.attrs["static_slope_order"] == pytest.approx(1.5, rel=1e-9)
     names = [g.name for g in gates(ds)]
     assert any("observed order of the elastic slope" in n for n in names), names
+    assert any("csph static H/dx=15 (the finest)" in n for n in names), names
+    assert not any("root region" in n for n in names), names
+    assert any("gate 1, static csph" in n for n in report_notes(ds))
+    # root_ladder's form (the FEM's root runs present): the root region's gates too, in N, each
+    # gate of the finest once
+    for r in static:
+        static[r]["first_failure_root"] = {c: (2e-7, 1e-3) for c in CASES}
+    ds = dataset(three_d, {}, ["compression"], [5], dict(part, root_runs=part["runs"]), static)
+    assert ds.static_first_failure_root_load.attrs["units"] == "N"
+    names = [g.name for g in gates(ds)]
     assert sum("csph static H/dx=15 (the finest): elastic slope" in n for n in names) == 1, names
     assert sum("csph static H/dx=15 (the finest): load at the first failure" in n
                for n in names) == 2, names
     notes = report_notes(ds)
-    assert any("gate 1, static csph" in n for n in notes)
     assert any("gate 2" in n and " N, limit" in n for n in notes), notes
+    assert "along the root path" in notes[0]
 
 
 def test_root_path_stops_after_both_first_failures(fem_quick):
