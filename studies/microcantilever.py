@@ -147,15 +147,16 @@ FEM_MAX_ROOT·H = 0.3 µm, past the first failure in the root region of both cas
 on every mesh (0.16–0.23 µm). The first-failure loads move by less than 0.07 % against steps of
 5 nm throughout (FEM, H/h = 5 and 10), at half the cost."""
 ROOT_STEP_3D = 4e-3
-"""The 3-D root path (:func:`root_path_3d`, the FEM ladder's and the static csph's in 3-D): the
-elastic first point FEM_STEP·H, then steps of ROOT_STEP_3D·H (20 nm) towards FEM_MAX_ROOT·H, each
-run stopped at the point where both cases have failed in the root region — a quarter of the
-points of the 2-D path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as much as the rest.
-Measured against that fine path (linear interpolation between points is second order in the
-step): the first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10 in 2-D, and
-by 0.06 % and 0.49 % at H/h = 5 in 3-D (intra fails there at 0.10 µm, 0.02 H, where the fine
-path's steps are a quarter as long) — the same on every mesh and in both methods, a fraction of
-gate 2's 3 %; steps twice as long move intra by 1.9 % in 3-D."""
+"""The 3-D root path (:func:`root_path_3d`: the FEM's and the static csph's in :func:`root_ladder`):
+the elastic first point FEM_STEP·H, then steps of ROOT_STEP_3D·H (20 nm) towards FEM_MAX_ROOT·H,
+each run stopped at the point where both cases have failed in the root region — a quarter of the
+points of the 2-D path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as much as the rest. Measured
+against that fine path (linear interpolation between points is second order in the step): the
+first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10 in 2-D, and by 0.06 % and
+0.49 % at H/h = 5 in 3-D (measured before EDGE_CLEARANCE, when intra failed at the edge at
+0.10 µm, 0.02 H, where the fine path's steps are a quarter as long; with it, at 0.15 µm) — the same
+on every mesh and in both methods, a fraction of gate 2's 3 %; steps twice as long move intra by
+1.9 % in 3-D."""
 SINGULAR_ORDER = 2 * 0.5445
 """Order of convergence of the compliance (elastic slope) of a body with a re-entrant right-angle
 corner (the root of the beam on its block, and the edge of the rigidly moved patch): the stress
@@ -792,7 +793,7 @@ def root_ladder(scene: MicroCantilever | None = None,
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
-    path takes about 15 minutes and csph's 19, at 15 each over an hour (14 and 2.5 GB)."""
+    path takes about 15 minutes and csph's 19, at 15 each over an hour (11 and 2.5 GB)."""
     scene = scene or SCENE()
     res = tuple(sorted(int(r) for r in resolutions))
     fem = fem_ladder(scene, res, FEM_MAX, res[:1], root_path=True)

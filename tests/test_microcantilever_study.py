@@ -148,7 +148,8 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
     gate 1's FEM check."""
     import dataclasses
 
-    from studies.microcantilever import CASES, FEM_MAX_ROOT, dataset, fem_ladder, gates, report_notes
+    from studies.microcantilever import (CASES, FEM_MAX_ROOT, dataset, fem_ladder, gates,
+                                         report_notes)
 
     part = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,))
     np.testing.assert_allclose(part["slopes"], fem_quick["slopes"], rtol=1e-9)
