@@ -10,6 +10,7 @@ STUDIES = {
     "plate": "studies.plate",
     "stability": "studies.stability",
     "microcantilever": "studies.microcantilever",
+    "microcantilever_root": "studies.microcantilever_root",
     "rc_beam": "studies.rc_beam",
 }
 # The studies that `workbench verify` runs, in order.

@@ -282,6 +282,8 @@ def validate(study, scene=None, solvers=None, resolutions=None, quick: bool = Fa
         scene = scene_cls()
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene: {scene!r} is not a Scene; allowed: a Scene instance")
+    if quick and hasattr(study, "quick_scene"):  # the scene a quick run takes (a 2-D variant)
+        scene = study.quick_scene(scene)
     if scene_cls is not None and study.NAME != "stability" and not isinstance(scene, scene_cls):
         raise ParameterError(f"scene: {type(scene).__name__} is not allowed for {study.NAME}; "
                              f"allowed: {scene_cls.__name__}")

@@ -703,6 +703,11 @@ def _tolerance(r0: int, e0: float, r: int) -> float:
     return max(TOL_SLOPE, e0 * (2 * r0 / r) ** SINGULAR_ORDER)
 
 
+def quick_scene(scene: MicroCantilever) -> MicroCantilever:
+    """The scene a ``--quick`` run takes: its 2-D variant (:data:`QUICK_DIM`)."""
+    return dataclasses.replace(scene, dim=QUICK_DIM)
+
+
 def default_resolutions(scene: MicroCantilever, quick: bool = False) -> dict:
     """The ladder a run of ``scene`` takes when none is given: the quick one, the 2-D one
     (:data:`RESOLUTIONS`) or the 3-D one (:data:`RESOLUTIONS_3D`)."""
@@ -722,7 +727,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
         if s not in SOLVERS:
             raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
     if quick:
-        scene = dataclasses.replace(scene, dim=QUICK_DIM)
+        scene = quick_scene(scene)
     default = default_resolutions(scene, quick)["csph"]
     if isinstance(resolutions, dict):
         resolutions = resolutions.get("csph", default)

@@ -715,20 +715,36 @@ def test_slope_off_the_ladder_against_the_fem_of_the_same_model(fem_quick):
     assert abs(S_csph / S_fem - 1) <= tol, (S_csph, S_fem, tol)
 
 
-def test_root_ladder_gates_its_own_static_and_fem_runs():
-    """root_ladder (gate 2 of the 3-D scene, apart from the default run), on the 2-D scene at
-    H/Δx = H/h = 5, 10: a dataset of the FEM's and static csph's runs along the root path alone,
+def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_path, capsys):
+    """`workbench run microcantilever_root` (:func:`studies.microcantilever.root_ladder`: gate 2
+    of the 3-D scene, apart from the default run), on the 2-D scene at H/Δx = H/h = 5, 10: a
+    dataset of the FEM's and static csph's runs along the root path alone, written and read back,
     whose gates check each csph load at the first failure in the root region against the FEM's
     limit within max(3 %, e(r)) (csph is 30 and 18 % high for inter, 20 and 9 % for intra, within
     49/23 % and 26/12 %), and whose gates at the finest fail with two meshes: no observed order,
-    so no uncertainty of the limit (NaN), and H/Δx = 10 is not within the issue's 3 %."""
-    from studies.microcantilever import gates, root_ladder
+    so no uncertainty of the limit (NaN), and H/Δx = 10 is not within the issue's 3 %. Its
+    figure, its accuracy-against-cost rows (csph and the FEM per case) and its report notes."""
+    from studies import microcantilever_root as study
+    from workbench import results
+    from workbench.app import cli
 
-    ds = root_ladder(MicroCantilever(dim=2), (5, 10))
+    argv = ["run", "microcantilever_root", "--set", "dim=2", "--resolution", "5", "--resolution",
+            "10", "--out", str(tmp_path)]
+    assert cli.main(argv) == 0
+    printed = capsys.readouterr().out
+    ds = results.read(tmp_path / "microcantilever_root.nc")
     assert list(ds.static_resolution.values) == [5, 10] and "static_root_error" in ds
     assert np.all(ds.static_status.values == "ok")
-    g = gates(ds)
+    g = study.gates(ds)
     per_resolution = [x for x in g if "csph static H/dx=" in x.name and "finest" not in x.name]
     assert len(per_resolution) == 4 and all(x.passed for x in per_resolution), per_resolution
     finest = [x for x in g if "finest" in x.name or "uncertainty" in x.name]
     assert finest and not any(x.passed for x in finest)
+    assert sum(line.lstrip().startswith("FAIL") for line in printed.splitlines()) == len(finest)
+    rows = study.errors(ds)
+    assert sorted({r["solver"] for r in rows}) == ["csph (inter)", "csph (intra)", "fem (inter)",
+                                                   "fem (intra)"]
+    assert all(np.isfinite(r["error"]) and r["wall_time"] > 0 for r in rows) and len(rows) == 8
+    assert (tmp_path / "microcantilever_root_first_failure.png").stat().st_size > 0
+    notes = study.report_notes(ds)
+    assert sum(n.startswith("gate 2 (first failure in the root region") for n in notes) == 2
