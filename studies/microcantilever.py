@@ -1178,6 +1178,10 @@ def _root_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
     ds["fem_root_error"] = (("case", "fem_resolution"), np.array([fem["root_error"][c] for c in CASES]),
                             {"units": "-", "long_name": "|load - limit| / limit (the FEM's own error)"})
     ds["fem_root_order"] = (("case",), np.array([fem["root_order"][c] for c in CASES]), {"units": "-"})
+    if fem.get("root_runs") is not None:  # root_ladder: the FEM's own runs along the root path
+        ds["fem_root_wall_time"] = (("fem_resolution",), np.array(
+            [fem["root_runs"][r]["wall_time"] for r in fem["resolutions"]], float), {
+            "units": "s", "long_name": "wall time of the FEM's run along the root path"})
     sr = sorted(static)
     cs = np.array([[static[r]["first_failure_root"][c] for r in sr] for c in CASES], float)
     ds["static_first_failure_root_deflection"] = (("case", "static_resolution"), cs[..., 0],
@@ -1604,7 +1608,9 @@ def report_notes(ds: xr.Dataset) -> list[str]:
             f = ds.fem_first_failure_root_load.sel(case=case).values
             c = ds.static_first_failure_root_load.sel(case=case).values
             notes.append(
-                f"gate 2 (first failure in the root region: 0 <= x <= L/2, upper half), {case}: FEM "
+                f"gate 2 (first failure in the root region: 0 <= x <= L/2, upper half"
+                + (f", {EDGE_CLEARANCE * float(ds.attrs['param_H']) * 1e6:g} um clear of the "
+                   "re-entrant side edges" if _is_3d(ds) else "") + f"), {case}: FEM "
                 + ", ".join(f"{v:.4g} (H/h = {r})" for r, v in zip(fr, f))
                 + f" {unit}, limit {float(ds.fem_root_limit.sel(case=case)):.4g} (observed order "
                 f"{float(ds.fem_root_order.sel(case=case)):.3g}; the limit's uncertainty "

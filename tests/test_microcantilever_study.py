@@ -734,7 +734,7 @@ def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_p
     printed = capsys.readouterr().out
     ds = results.read(tmp_path / "microcantilever_root.nc")
     assert list(ds.static_resolution.values) == [5, 10] and "static_root_error" in ds
-    assert np.all(ds.static_status.values == "ok")
+    assert np.all(ds.static_status.values == "ok") and np.all(ds.fem_root_wall_time.values > 0)
     g = study.gates(ds)
     per_resolution = [x for x in g if "csph static H/dx=" in x.name and "finest" not in x.name]
     assert len(per_resolution) == 4 and all(x.passed for x in per_resolution), per_resolution
