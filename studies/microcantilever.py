@@ -798,7 +798,9 @@ def root_ladder(scene: MicroCantilever | None = None,
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
-    path takes about 15 minutes and csph's 19, at 15 each over an hour (11 and 2.5 GB)."""
+    path takes about 20 minutes and csph's 14, at 15 the FEM's an hour (11 GB) and csph's more
+    than two (3.7 GB). ``workbench run microcantilever_root`` runs it
+    (:mod:`studies.microcantilever_root`)."""
     scene = scene or SCENE()
     res = tuple(sorted(int(r) for r in resolutions))
     fem = fem_ladder(scene, res, FEM_MAX, res[:1], root_path=True)
