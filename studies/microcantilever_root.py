@@ -36,8 +36,8 @@ more than two hours and 3.7 GB (its AMG-CG solves run on one core)."""
 QUICK_RESOLUTIONS = {"csph": [5, 10, 20, 40]}
 """``--quick`` (2-D, plane strain): the 2-D ladder of gate 2 up to H/Δx = 40, where the issue's
 bounds at the finest hold in 2-D (1 min 41 s on 2 cores beside another job, csph at 40 43 s and
-the FEM at 40 37 s of it; every gate passes). Below 40 csph's 2-D loads are not within 3 % (4.5 %
-inter, 4.5 % intra at 20)."""
+the FEM at 40 37 s of it; every gate passes). Below 40 csph's 2-D loads are not within 3 % of the
+FEM's limit: 4.5 % (inter) and 4.5 % (intra) at 20 against this ladder's limit."""
 
 gates = mc.gates
 report_notes = mc.report_notes
