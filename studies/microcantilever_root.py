@@ -77,9 +77,8 @@ def errors(ds: xr.Dataset) -> list[dict]:
             if np.isfinite(e):
                 rows.append(dict(solver=f"csph ({case})", resolution=int(r), error=float(e),
                                  wall_time=float(t)))
-        wall = ds.fem_root_wall_time if "fem_root_wall_time" in ds else ds.fem_wall_time
         for r, e, t in zip(ds.fem_resolution.values, ds.fem_root_error.sel(case=case).values,
-                           wall.values):
+                           ds.fem_root_wall_time.values):
             if np.isfinite(e):
                 rows.append(dict(solver=f"fem ({case})", resolution=int(r), error=float(e),
                                  wall_time=float(t)))
