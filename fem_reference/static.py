@@ -46,7 +46,7 @@ import scipy.sparse.linalg as spla
 
 from .assembly import Discretisation
 from .constitutive import embed, stored_energy_density, update
-from workbench.linear_systems import KeptHierarchy, direct_factor, use_amg
+from workbench.linear_systems import KeptHierarchy, direct_factor, forcing_term, use_amg
 from workbench.materials import HIST_DAMAGE, Material, MaterialTable
 from workbench.results import STOPPED
 
@@ -308,8 +308,9 @@ class TangentSolver:
     Direct (SuperLU) by default. With ``reuse`` (the default above ``reuse_above`` unknowns), the
     last LU factors precondition GMRES on the new tangent; the tangent is factorised again only
     when GMRES has not reached the tolerance in ``max_krylov`` iterations. Newton asks for the
-    forcing term η = min(1e-3, 0.1 ‖r‖/scale) (Eisenstat & Walker 1996): with η = O(‖r‖) the
-    convergence stays quadratic while most factorisations of a load or time step are saved.
+    forcing term η = min(1e-3, 0.1 ‖r‖/scale) (:func:`workbench.linear_systems.forcing_term`):
+    with η = O(‖r‖) the convergence stays quadratic while most factorisations of a load or time
+    step are saved.
 
     In 3-D above :data:`workbench.linear_systems.AMG_ABOVE` unknowns the systems are solved by a
     Krylov method (CG for the symmetric standard element, GMRES for F-bar's unsymmetric tangent)
@@ -428,7 +429,7 @@ def newton(problem: Problem, state: State, u0: np.ndarray, lam: float, rtol: flo
         if fixed_matrix is not None:
             du_f = fixed_matrix(-rf)
         else:  # near convergence the tangent barely changes: the last factors precondition GMRES
-            du_f = solver.solve(K, -rf, rtol=min(1e-3, 0.1 * rn), near=rn < 1e-2)
+            du_f = solver.solve(K, -rf, rtol=forcing_term(rn), near=rn < 1e-2)
         res.solve_time += time.perf_counter() - t1
         res.assembly_time += t1 - t0
         du = np.zeros_like(u)

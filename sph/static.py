@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workbench.linear_systems import KeptHierarchy, rigid_body_modes, solve_symmetric
+from workbench.linear_systems import (RTOL, KeptHierarchy, forcing_term, rigid_body_modes,
+                                      solve_symmetric)
 from workbench.results import STOPPED
 
 from .integrate import cfl_time_step
@@ -63,20 +64,21 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             return x, False, it
         R = -(f + cons.f_ext).ravel()
         Rf = R[free]
-        if it > 0:
-            scale = (force_scale if force_scale is not None
-                     else max(f_norm, float(np.linalg.norm(R[fixed]))))
-            if np.linalg.norm(Rf) <= tol * scale or last_step <= ROUND_OFF * size:
-                return x, True, it
+        scale = (force_scale if force_scale is not None
+                 else max(f_norm, float(np.linalg.norm(R[fixed]))))
+        if it > 0 and (np.linalg.norm(Rf) <= tol * scale or last_step <= ROUND_OFF * size):
+            return x, True, it
         K = body.tangent(A)
         Kff = K[free][:, free]
         rhs = -Rf
         if it == 0 and np.any(dxp != 0):
             Kfp = K[free][:, fixed]
             rhs = rhs - Kfp @ dxp
+        # inexact Newton: the system to the forcing term of the residual it corrects
+        rtol = forcing_term(np.linalg.norm(rhs) / scale) if scale > 0 else None
         try:
             du = solve_linear(Kff, rhs, near_null=lambda: rigid_body_modes(x, free),
-                              dim=x.shape[1], kept=kept)
+                              dim=x.shape[1], kept=kept, rtol=rtol)
         except Exception:  # singular tangent
             return x, False, it
         if not np.all(np.isfinite(du)):
@@ -95,18 +97,20 @@ DENSE_BELOW = 3000
 second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
 
 
-def solve_linear(K, rhs, near_null=None, dim: int = 3,
-                 kept: KeptHierarchy | None = None) -> np.ndarray:
+def solve_linear(K, rhs, near_null=None, dim: int = 3, kept: KeptHierarchy | None = None,
+                 rtol: float | None = None) -> np.ndarray:
     """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, above that
     :func:`workbench.linear_systems.solve_symmetric` (SuperLU, or in 3-D above
     :data:`~workbench.linear_systems.AMG_ABOVE` unknowns CG with an AMG hierarchy built on
     ``near_null``, the rigid-body modes of the free DOFs, point-major, or a callable giving
-    them, and kept in ``kept`` for the next systems; ``dim``: the body's dimension)."""
+    them, and kept in ``kept`` for the next systems, to the relative residual ``rtol``, by
+    default :data:`~workbench.linear_systems.RTOL`; ``dim``: the body's dimension)."""
     import scipy.linalg as sla
 
     if K.shape[0] < DENSE_BELOW:
         return sla.solve(K.toarray(), rhs, check_finite=False)
-    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept)
+    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept,
+                           rtol=RTOL if rtol is None else rtol)
 
 
 def spacing(body: Body) -> float:
