@@ -798,8 +798,8 @@ def root_ladder(scene: MicroCantilever | None = None,
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
-    path takes about 20 minutes and csph's 14, at 15 the FEM's an hour (11 GB) and csph's more
-    than two (3.7 GB). ``workbench run microcantilever_root`` runs it
+    path takes about 20 minutes and csph's 7, at 15 the FEM's an hour (11 GB) and csph's 44
+    minutes (3.7 GB). ``workbench run microcantilever_root`` runs it
     (:mod:`studies.microcantilever_root`)."""
     scene = scene or SCENE()
     res = tuple(sorted(int(r) for r in resolutions))
