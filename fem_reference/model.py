@@ -158,6 +158,15 @@ class FemModel:
             return (n[:, None] * self.d + np.arange(self.d)).ravel()
         return n * self.d + axis
 
+    def point_regions(self) -> np.ndarray:
+        """(nel·nqp,) index into ``model.regions`` of each quadrature point (element-major, the
+        rows of the material history) where the scene's geometry puts the point itself, not its
+        element's centroid: a field read per region (a failure strain, say) then sees each
+        region's true boundary rather than the mesh's staircase of it. A point outside every
+        region takes its element's."""
+        at = _assign(self.model, self.disc.Xq.reshape(-1, self.d), TOL * self.h)
+        return np.where(at >= 0, at, np.repeat(self.region, self.disc.nqp))
+
     def elements_of(self, regions) -> np.ndarray:
         """bool (nel,): elements of the named regions (all when None)."""
         if regions is None:

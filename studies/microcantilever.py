@@ -100,11 +100,15 @@ the 3-D FEM's limit 8.33 kN/m (the FEM itself +5.4 and +2.6 %), nodal integratio
 7.82 kN/m, −6.5 and −6.1 % (it hardly converges: the one-sided gradients at the faces are not
 integration-consistent); the dynamic runs (compression rule) are stable, their energy balance
 within 1.4e-3 (intra) and 2.1e-4 (inter) of the external work, 98 s and 63 s."""
-FEM_RESOLUTIONS = (5, 10, 20, 40)
+FEM_RESOLUTIONS = (5, 10, 20, 40, 80)
 """Elements (9-node quadrilaterals, plane strain) across H of the FEM reference of a 2-D run; the
-smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5); the finest, 40, is the
-reference of the static csph run at :data:`STATIC_FINEST` (9600 elements, about 1.6 minutes on
-one core along the whole path of gate 2)."""
+smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5). The reference of the
+static csph run at :data:`STATIC_FINEST` is the limit of the two finest. The ladder goes to 80
+(38 400 elements, 4 minutes on one core along the root path) because the inter case's load at
+the first failure, read where the geometry puts each point (:func:`fem_static`), converges at
+first order from above: 206.4, 193.0, 185.3, 181.8, 180.5 N/m at H/h = 5 to 80, and at 40 the FEM
+is 1.8 % from the limit of 20 and 40, more than half the 3 % it checks; at 80 it is 0.6 % from the
+limit of 40 and 80, which is within 0.4 % of the former."""
 STATIC_FINEST = 40
 """Gate 2's static csph runs (the full 2-D run) are at the run's resolutions and at H/Δx =
 STATIC_FINEST, where the issue's bounds at the finest resolution are checked: the elastic slope
@@ -371,7 +375,10 @@ def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX
     """The FEM (9-node quadrilaterals or 27-node hexahedra, J2 with Swift per grain and boundary,
     the scene's plane) of the scene at H/h = ``resolution`` along the static path of FEM_STEP·H
     up to fem_max·H (or along ``path``, m): ``deflection`` (m), ``load`` (N/m in 2-D, downward
-    on the beam), ``damage`` {case: max over the points of ε_p/ε_L of that case} and
+    on the beam), ``damage`` {case: max over the quadrature points of ε_p/ε_L of that case, ε_L
+    that of the region the scene's geometry puts the point in, not its element's (the mesh draws
+    a slanted grain boundary as a staircase of elements, and inter's first failure followed the
+    staircase's nearest step to the root, not the boundary: README)} and
     ``damage_root`` (the same over the points of :func:`root_region`) per path point (NaN where
     not reached), ``eps_p_max``, ``status``, ``wall_time``. ``until_root_failure``: stop once
     every case has failed in the root region."""
@@ -386,9 +393,8 @@ def fem_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MAX
     path = static_path(scene, fem_max) if path is None else np.asarray(path, float)
     model = static_model(scene, h, path)
     fm = discretise(model, int(resolution))
-    nqp = fm.disc.nqp
-    limits = {c: np.repeat(region_limits(dataclasses.replace(scene, case=c), h, model)[fm.region], nqp)
-              for c in CASES}
+    at = fm.point_regions()  # ε_L where the geometry puts each point, not its element's region
+    limits = {c: region_limits(dataclasses.replace(scene, case=c), h, model)[at] for c in CASES}
     root = root_region(scene, fm.disc.Xq.reshape(-1, fm.disc.d))
     n = len(path)
     out = dict(deflection=path, load=np.full(n, np.nan), eps_p_max=np.full(n, np.nan),
@@ -791,19 +797,21 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     return ds
 
 
-def root_ladder(scene: MicroCantilever | None = None,
-                resolutions=FEM_RESOLUTIONS_3D) -> xr.Dataset:
+def root_ladder(scene: MicroCantilever | None = None, resolutions=FEM_RESOLUTIONS_3D,
+                fem_resolutions=None) -> xr.Dataset:
     """Gate 2 of the 3-D scene, apart from the default run: the FEM ladder (27-node hexahedra in
     3-D) and static csph at the same ``resolutions`` along :func:`root_path_3d`, each stopped at
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
     path takes about 20 minutes and csph's 7, at 15 the FEM's an hour (11 GB) and csph's 44
-    minutes (3.7 GB). ``workbench run microcantilever_root`` runs it
-    (:mod:`studies.microcantilever_root`)."""
+    minutes (3.7 GB). ``fem_resolutions``: the FEM's ladder where it is not the same (the 2-D
+    one goes a mesh further: :data:`FEM_RESOLUTIONS`). ``workbench run microcantilever_root``
+    runs it (:mod:`studies.microcantilever_root`)."""
     scene = scene or SCENE()
     res = tuple(sorted(int(r) for r in resolutions))
-    fem = fem_ladder(scene, res, FEM_MAX, res[:1], root_path=True)
+    fres = res if fem_resolutions is None else tuple(sorted(int(r) for r in fem_resolutions))
+    fem = fem_ladder(scene, fres, FEM_MAX, fres[:1], root_path=True)
     static = {r: csph_static(scene, r, path=root_path_3d(scene), until_root_failure=True)
               for r in res}
     return dataset(scene, {}, ["compression"], [res[0]], fem, static)

@@ -13,7 +13,8 @@ FEM's own error at the same nodal spacing, at least 3 %) and at the finest (3 %,
 bound), beside the elastic slopes (1 % at the finest). The dataset carries no particle dynamics:
 its variables are the ``fem_*`` and ``static_*`` ones of ``microcantilever.nc`` (contract).
 
-``--quick``: the 2-D scene (plane strain) at H/Δx = H/h = 5, 10, 20, 40, under two minutes.
+``--quick``: the 2-D scene (plane strain), csph at H/Δx = 5, 10, 20, 40 and the FEM at H/h = 5 to
+80, about 6 minutes.
 Solvers: csph (the FEM runs beside it as the reference).
 """
 from __future__ import annotations
@@ -37,9 +38,12 @@ cores, the FEM at 10 takes 20 minutes and at 15 an hour and 11 GB, csph at 10 7 
 3 % at the finest would need H/Δx ≈ 25 (README)."""
 QUICK_RESOLUTIONS = {"csph": [5, 10, 20, 40]}
 """``--quick`` (2-D, plane strain): the 2-D ladder of gate 2 up to H/Δx = 40, where the issue's
-bounds at the finest hold in 2-D (1 min 41 s on 2 cores beside another job, csph at 40 43 s and
-the FEM at 40 37 s of it; every gate passes). Below 40 csph's 2-D loads are not within 3 % of the
-FEM's limit: 4.5 % (inter) and 4.5 % (intra) at 20 against this ladder's limit."""
+bounds at the finest hold in 2-D (5 min 51 s on one core beside another job, csph at 40 42 s and
+the FEM at 80 3.9 minutes of it; every gate passes). Below 40 csph's 2-D loads are not within 3 %
+of the FEM's limit: 5.9 % (inter) and 4.6 % (intra) at 20."""
+QUICK_FEM_RESOLUTIONS = mc.FEM_RESOLUTIONS
+"""``--quick``: the FEM's 2-D ladder, H/h = 5 to 80, a mesh beyond csph's
+(:data:`studies.microcantilever.FEM_RESOLUTIONS` says why)."""
 
 gates = mc.gates
 report_notes = mc.report_notes
@@ -65,7 +69,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     res = check_resolutions(resolutions or table["csph"])
     for r in res:  # a grain boundary thinner than the spacing is bad input, not a failed run
         scene.model(scene.H / r)
-    return mc.root_ladder(scene, res)
+    return mc.root_ladder(scene, res, QUICK_FEM_RESOLUTIONS if quick and not resolutions else None)
 
 
 def errors(ds: xr.Dataset) -> list[dict]:
