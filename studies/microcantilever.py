@@ -804,7 +804,7 @@ def root_ladder(scene: MicroCantilever | None = None, resolutions=FEM_RESOLUTION
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
-    path takes about 20 minutes and csph's 7, at 15 the FEM's an hour (11 GB) and csph's 44
+    path takes about 20 minutes and csph's 7, at 15 the FEM's 53 minutes (11 GB) and csph's 44
     minutes (3.7 GB). ``fem_resolutions``: the FEM's ladder where it is not the same (the 2-D
     one goes a mesh further: :data:`FEM_RESOLUTIONS`). ``workbench run microcantilever_root``
     runs it (:mod:`studies.microcantilever_root`)."""
