@@ -75,7 +75,7 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
             Kfp = K[free][:, fixed]
             rhs = rhs - Kfp @ dxp
         # inexact Newton: the system to the forcing term of the residual it corrects
-        rtol = forcing_term(np.linalg.norm(rhs) / scale) if scale > 0 else None
+        rtol = forcing_term(np.linalg.norm(rhs) / scale) if scale > 0 else RTOL
         try:
             du = solve_linear(Kff, rhs, near_null=lambda: rigid_body_modes(x, free),
                               dim=x.shape[1], kept=kept, rtol=rtol)
@@ -98,19 +98,18 @@ second neighbours, so a small body's sparse LU fills in and is slower than a den
 
 
 def solve_linear(K, rhs, near_null=None, dim: int = 3, kept: KeptHierarchy | None = None,
-                 rtol: float | None = None) -> np.ndarray:
+                 rtol: float = RTOL) -> np.ndarray:
     """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, above that
     :func:`workbench.linear_systems.solve_symmetric` (SuperLU, or in 3-D above
     :data:`~workbench.linear_systems.AMG_ABOVE` unknowns CG with an AMG hierarchy built on
     ``near_null``, the rigid-body modes of the free DOFs, point-major, or a callable giving
-    them, and kept in ``kept`` for the next systems, to the relative residual ``rtol``, by
-    default :data:`~workbench.linear_systems.RTOL`; ``dim``: the body's dimension)."""
+    them, and kept in ``kept`` for the next systems, to the relative residual ``rtol``;
+    ``dim``: the body's dimension)."""
     import scipy.linalg as sla
 
     if K.shape[0] < DENSE_BELOW:
         return sla.solve(K.toarray(), rhs, check_finite=False)
-    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept,
-                           rtol=RTOL if rtol is None else rtol)
+    return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept, rtol=rtol)
 
 
 def spacing(body: Body) -> float:

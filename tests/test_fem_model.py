@@ -80,8 +80,9 @@ def test_quadrature_points_take_the_region_the_geometry_gives_them():
     names = np.array([r.name for r in fm.model.regions])
     X = fm.disc.Xq.reshape(-1, fm.d)
     s = sc.seeds()
-    d2 = np.sort(((X[:, None, :] - s[None]) ** 2).sum(axis=2), axis=1)
-    near = np.argsort(((X[:, None, :] - s[None]) ** 2).sum(axis=2), axis=1)[:, :2]
+    D2 = ((X[:, None, :] - s[None]) ** 2).sum(axis=2)
+    near = np.argsort(D2, axis=1)[:, :2]
+    d2 = np.take_along_axis(D2, near, axis=1)
     gap = (d2[:, 1] - d2[:, 0]) / (2 * np.linalg.norm(s[near[:, 1]] - s[near[:, 0]], axis=1))
     beam = X[:, 0] > 0
     in_gb = np.char.startswith(names[fm.point_regions()], "gb")
