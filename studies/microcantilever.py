@@ -150,17 +150,17 @@ ROOT_STEP = 4e-3
 FEM_MAX_ROOT·H = 0.3 µm, past the first failure in the root region of both cases in both methods
 on every mesh (0.16–0.23 µm). The first-failure loads move by less than 0.07 % against steps of
 5 nm throughout (FEM, H/h = 5 and 10), at half the cost."""
-ROOT_STEP_3D = 4e-3
-"""The 3-D root path (:func:`root_path_3d`: the FEM's and the static csph's in :func:`root_ladder`):
-the elastic first point FEM_STEP·H, then steps of ROOT_STEP_3D·H (20 nm) towards FEM_MAX_ROOT·H,
-each run stopped at the point where both cases have failed in the root region — a quarter of the
-points of the 2-D path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as much as the rest. Measured
-against that fine path (linear interpolation between points is second order in the step): the
-first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10 in 2-D, and by 0.06 % and
-0.49 % at H/h = 5 in 3-D (measured before EDGE_CLEARANCE, when intra failed at the edge at
-0.10 µm, 0.02 H, where the fine path's steps are a quarter as long; with it, at 0.15 µm) — the same
-on every mesh and in both methods, a fraction of gate 2's 3 %; steps twice as long move intra by
-1.9 % in 3-D."""
+ROOT_LADDER_STEP = 4e-3
+"""The path of :func:`root_ladder` (:func:`root_ladder_path`: the FEM's and the static csph's, in
+2-D and 3-D): the elastic first point FEM_STEP·H, then steps of ROOT_LADDER_STEP·H (20 nm) towards
+FEM_MAX_ROOT·H, each run stopped at the point where both cases have failed in the root region — a
+quarter of the points of the full 2-D run's path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as
+much as the rest. Measured against that fine path (linear interpolation between points is second
+order in the step): the first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10
+in 2-D, and by 0.06 % and 0.49 % at H/h = 5 in 3-D (measured before EDGE_CLEARANCE, when intra
+failed at the edge at 0.10 µm, 0.02 H, where the fine path's steps are a quarter as long; with it,
+at 0.15 µm) — the same on every mesh and in both methods, a fraction of gate 2's 3 %; steps twice
+as long move intra by 1.9 % in 3-D."""
 SINGULAR_ORDER = 2 * 0.5445
 """Order of convergence of the compliance (elastic slope) of a body with a re-entrant right-angle
 corner (the root of the beam on its block, and the edge of the rigidly moved patch): the stress
@@ -328,11 +328,11 @@ def static_path(scene: MicroCantilever, fem_max: float = FEM_MAX) -> np.ndarray:
     return scene.H * np.concatenate([fine, FEM_MAX + ROOT_STEP * np.arange(1, max(n, 0) + 1)])
 
 
-def root_path_3d(scene: MicroCantilever) -> np.ndarray:
-    """The deflections of the 3-D root path, m: FEM_STEP·H (elastic: the slope), then on in steps
-    of ROOT_STEP_3D·H up to FEM_MAX_ROOT·H (:data:`ROOT_STEP_3D`)."""
-    n = int(round((FEM_MAX_ROOT - FEM_STEP) / ROOT_STEP_3D))
-    return scene.H * (FEM_STEP + ROOT_STEP_3D * np.arange(n + 1))
+def root_ladder_path(scene: MicroCantilever) -> np.ndarray:
+    """The deflections of :func:`root_ladder`'s path (2-D and 3-D), m: FEM_STEP·H (elastic: the
+    slope), then on in steps of ROOT_LADDER_STEP·H up to FEM_MAX_ROOT·H (:data:`ROOT_LADDER_STEP`)."""
+    n = int(round((FEM_MAX_ROOT - FEM_STEP) / ROOT_LADDER_STEP))
+    return scene.H * (FEM_STEP + ROOT_LADDER_STEP * np.arange(n + 1))
 
 
 def _root_failed(damage_root: dict, k: int) -> bool:
@@ -616,7 +616,7 @@ def fem_ladder(scene: MicroCantilever, resolutions, fem_max: float = FEM_MAX,
     (default: all); the others run its first point only, which is elastic — their slope, and NaN
     beyond it (the 3-D ladder, :data:`FEM_FULL_PATH_3D`); the window is then the finest full
     run's. ``root_path`` (:func:`root_ladder`): the first failures in the root region come from runs
-    along :func:`root_path_3d` at every resolution, each stopped once both cases have failed
+    along :func:`root_ladder_path` at every resolution, each stopped once both cases have failed
     there (``root_runs``); their first point gives the slope of the meshes not in ``full``."""
     base = dataclasses.replace(scene, case="inter", failure="compression", name=NAME,
                                dt_reference="cfl", dt_factor=0.3, band=0.0)
@@ -645,7 +645,7 @@ def _fem_ladder(scene: MicroCantilever, res: tuple, fem_max: float = FEM_MAX,
                 full: tuple | None = None, root_path: bool = False) -> dict:
     res = list(res)
     full = res if full is None else list(full)
-    root_runs = {r: fem_static(scene, r, path=root_path_3d(scene), until_root_failure=True)
+    root_runs = {r: fem_static(scene, r, path=root_ladder_path(scene), until_root_failure=True)
                  for r in res} if root_path else None
     runs = {r: fem_static(scene, r, fem_max) if r in full else
             _first_point_only(scene, r, fem_max, None if root_runs is None else root_runs[r])
@@ -800,7 +800,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
 def root_ladder(scene: MicroCantilever | None = None, resolutions=FEM_RESOLUTIONS_3D,
                 fem_resolutions=None) -> xr.Dataset:
     """Gate 2 of the 3-D scene, apart from the default run: the FEM ladder (27-node hexahedra in
-    3-D) and static csph at the same ``resolutions`` along :func:`root_path_3d`, each stopped at
+    3-D) and static csph at the same ``resolutions`` along :func:`root_ladder_path`, each stopped at
     the root region's last first failure, in a dataset without particle runs whose :func:`gates`
     are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
     :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
@@ -812,7 +812,7 @@ def root_ladder(scene: MicroCantilever | None = None, resolutions=FEM_RESOLUTION
     res = tuple(sorted(int(r) for r in resolutions))
     fres = res if fem_resolutions is None else tuple(sorted(int(r) for r in fem_resolutions))
     fem = fem_ladder(scene, fres, FEM_MAX, fres[:1], root_path=True)
-    static = {r: csph_static(scene, r, path=root_path_3d(scene), until_root_failure=True)
+    static = {r: csph_static(scene, r, path=root_ladder_path(scene), until_root_failure=True)
               for r in res}
     return dataset(scene, {}, ["compression"], [res[0]], fem, static)
 

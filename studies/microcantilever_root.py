@@ -5,8 +5,8 @@ hours on 2 cores (:func:`studies.microcantilever.root_ladder`).
 
 At each resolution the FEM (27-node hexahedra in 3-D, 9-node quadrilaterals in 2-D; J2 with Swift
 per grain and boundary) and static csph (the study's options, Newton) push the loading patch down
-along :func:`studies.microcantilever.root_path_3d` without damage, and each stops once both cases
-have failed in :func:`studies.microcantilever.root_region` (ε_p ≥ ε_L: the grain boundaries'
+along :func:`studies.microcantilever.root_ladder_path` without damage, and each stops once both
+cases have failed in :func:`studies.microcantilever.root_region` (ε_p ≥ ε_L: the grain boundaries'
 0.002 for ``inter``, the grains' for ``intra``). The FEM's loads at that first failure give a
 Richardson limit at the singular order; csph's are gated against it at each resolution (within the
 FEM's own error at the same nodal spacing, at least 3 %) and at the finest (3 %, the issue's

@@ -196,19 +196,19 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
 
 
 def test_root_path_stops_after_both_first_failures(fem_quick):
-    """The 3-D ladder's root path (root_path_3d: the elastic first point, then steps of
-    ROOT_STEP_3D·H), here on the 2-D meshes H/h = 5, 10: each run stops at the first path point
+    """The 3-D ladder's root path (root_ladder_path: the elastic first point, then steps of
+    ROOT_LADDER_STEP·H), here on the 2-D meshes H/h = 5, 10: each run stops at the first path point
     where both cases have failed in the root region (NaN beyond), its first point gives the
     slope of the meshes outside ``full``, and the first-failure loads are those of the fine path
     (steps of FEM_STEP·H to 0.02 H, then ROOT_STEP·H) within 0.5 %: linear interpolation between
     path points is second order in the step, and four times the fine path's last step costs
-    0.03 % (inter) and 0.11 % (intra) at H/h = 10 (studies.microcantilever.ROOT_STEP_3D); a
+    0.03 % (inter) and 0.11 % (intra) at H/h = 10 (studies.microcantilever.ROOT_LADDER_STEP); a
     path that stopped one point early has no failure at all (NaN)."""
-    from studies.microcantilever import CASES, FEM_MAX_ROOT, fem_ladder, root_path_3d
+    from studies.microcantilever import CASES, FEM_MAX_ROOT, fem_ladder, root_ladder_path
 
     lad = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,), root_path=True)
     np.testing.assert_allclose(lad["slopes"], fem_quick["slopes"], rtol=1e-9)
-    path = root_path_3d(MicroCantilever(dim=2))
+    path = root_ladder_path(MicroCantilever(dim=2))
     for r, run in lad["root_runs"].items():
         assert run["status"] == "ok"
         np.testing.assert_array_equal(run["deflection"], path)
@@ -254,7 +254,7 @@ def test_first_failure_in_the_root_region(fem_quick):
     H/Δx = 5 (13 % from these two meshes; csph is 8 % from their limit, 1.8 % above the FEM at
     H/h = 5)."""
     from studies.microcantilever import (SINGULAR_ORDER, TOL_FIRST_FAILURE, csph_static,
-                                         root_path_3d, slope_tolerance)
+                                         root_ladder_path, slope_tolerance)
 
     st = csph_static(MicroCantilever(dim=2), 5)
     assert st["status"] == "ok"
@@ -272,11 +272,11 @@ def test_first_failure_in_the_root_region(fem_quick):
         assert err <= tol, (case, st["first_failure_root"][case], lim, err, tol)
     # the 3-D ladder's root path, stopped once both cases have failed there: the same first
     # failures within the 0.5 % of its coarser steps (test_root_path_stops_after_both_first_failures)
-    coarse = csph_static(MicroCantilever(dim=2), 5, path=root_path_3d(MicroCantilever(dim=2)),
+    coarse = csph_static(MicroCantilever(dim=2), 5, path=root_ladder_path(MicroCantilever(dim=2)),
                          until_root_failure=True)
     assert coarse["status"] == "ok" and coarse["elastic_slope"] == st["elastic_slope"]
     n = len(coarse["damage_root"]["inter"])
-    assert n < len(root_path_3d(MicroCantilever(dim=2))) and np.all(np.isnan(coarse["load"][n:]))
+    assert n < len(root_ladder_path(MicroCantilever(dim=2))) and np.all(np.isnan(coarse["load"][n:]))
     for case in ("inter", "intra"):
         assert coarse["damage_root"][case][-1] >= 1
         assert coarse["first_failure_root"][case][1] == pytest.approx(
