@@ -330,7 +330,8 @@ def static_path(scene: MicroCantilever, fem_max: float = FEM_MAX) -> np.ndarray:
 
 def root_ladder_path(scene: MicroCantilever) -> np.ndarray:
     """The deflections of :func:`root_ladder`'s path (2-D and 3-D), m: FEM_STEP·H (elastic: the
-    slope), then on in steps of ROOT_LADDER_STEP·H up to FEM_MAX_ROOT·H (:data:`ROOT_LADDER_STEP`)."""
+    slope), then on in steps of ROOT_LADDER_STEP·H up to FEM_MAX_ROOT·H
+    (:data:`ROOT_LADDER_STEP`)."""
     n = int(round((FEM_MAX_ROOT - FEM_STEP) / ROOT_LADDER_STEP))
     return scene.H * (FEM_STEP + ROOT_LADDER_STEP * np.arange(n + 1))
 

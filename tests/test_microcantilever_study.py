@@ -196,7 +196,7 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
 
 
 def test_root_path_stops_after_both_first_failures(fem_quick):
-    """The 3-D ladder's root path (root_ladder_path: the elastic first point, then steps of
+    """The root ladder's path (root_ladder_path: the elastic first point, then steps of
     ROOT_LADDER_STEP·H), here on the 2-D meshes H/h = 5, 10: each run stops at the first path point
     where both cases have failed in the root region (NaN beyond), its first point gives the
     slope of the meshes outside ``full``, and the first-failure loads are those of the fine path
@@ -270,13 +270,14 @@ def test_first_failure_in_the_root_region(fem_quick):
         tol = max(TOL_FIRST_FAILURE, fem_quick["root_error"][case][0] * 2 ** SINGULAR_ORDER)
         err = abs(st["first_failure_root"][case][1] / lim - 1)
         assert err <= tol, (case, st["first_failure_root"][case], lim, err, tol)
-    # the 3-D ladder's root path, stopped once both cases have failed there: the same first
+    # the root ladder's path, stopped once both cases have failed there: the same first
     # failures within the 0.5 % of its coarser steps (test_root_path_stops_after_both_first_failures)
     coarse = csph_static(MicroCantilever(dim=2), 5, path=root_ladder_path(MicroCantilever(dim=2)),
                          until_root_failure=True)
     assert coarse["status"] == "ok" and coarse["elastic_slope"] == st["elastic_slope"]
     n = len(coarse["damage_root"]["inter"])
-    assert n < len(root_ladder_path(MicroCantilever(dim=2))) and np.all(np.isnan(coarse["load"][n:]))
+    assert n < len(root_ladder_path(MicroCantilever(dim=2)))
+    assert np.all(np.isnan(coarse["load"][n:]))
     for case in ("inter", "intra"):
         assert coarse["damage_root"][case][-1] >= 1
         assert coarse["first_failure_root"][case][1] == pytest.approx(
