@@ -35,7 +35,7 @@ RESOLUTIONS = {"csph": list(mc.FEM_RESOLUTIONS_3D)}
 cores, the FEM at 10 takes 20 minutes and at 15 53 minutes and 11 GB, csph at 10 7 minutes and at
 15 44 minutes and 3.7 GB (its AMG-CG solves run on one core). csph's load is then 16.8, 8.8 and
 5.2 % (intra; observed order 1.06) and 17.1, 7.1 and 5.0 % (inter; 1.13) above the FEM's limit:
-every per-resolution gate passes, the issue's 3 % at the finest would need H/Δx ≈ 25 (README)."""
+every per-resolution gate passes, the issue's 3 % at the finest would need H/Δx ≈ 26 (README)."""
 QUICK_RESOLUTIONS = {"csph": [5, 10, 20, 40]}
 """``--quick`` (2-D, plane strain): the 2-D ladder of gate 2 up to H/Δx = 40, where the issue's
 bounds at the finest hold in 2-D (5 min 51 s on one core beside another job, csph at 40 42 s and
