@@ -1,10 +1,12 @@
 """Reliability (issue 14): every bad input is refused before any work with one line and exit
 status 2; no finished work is lost (run cache, fallback folder, resume after an interrupt or a
 kill, fsync before the rename); progress and the solver's own wall time."""
+import contextlib
 import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -202,6 +204,127 @@ def test_failed_write_saves_the_dataset_elsewhere(tmp_path, capsys, monkeypatch)
     ds = results.read(saved[0])
     assert ds.stress.sel(solver="analytic").max() > 6e8  # the whole dataset (Swift curve ~700 MPa)
     assert not list(out_dir.glob("*.nc")) and not list(out_dir.glob(".*.tmp"))
+
+
+@contextlib.contextmanager
+def small_filesystem(where):
+    """A real 200 kB file system (tmpfs) mounted at ``where``; yields None where this machine
+    does not permit mounting (the caller then injects the libraries' own exceptions). Unmounted
+    at the end."""
+    where.mkdir(parents=True, exist_ok=True)
+    try:
+        p = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(where)],
+                           capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        p = None
+    if p is None or p.returncode != 0:
+        yield None
+        return
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", "-l", str(where)], capture_output=True, timeout=30)
+
+
+def fill(folder, leave=0):
+    """Fill ``folder``'s file system up to ENOSPC, then free ``leave`` bytes."""
+    filler = folder / "filler"
+    with open(filler, "wb", buffering=0) as fh:
+        try:
+            while True:
+                fh.write(b"\0" * 4096)
+        except OSError:
+            pass
+    size = filler.stat().st_size
+    with open(filler, "r+b") as fh:
+        fh.truncate(max(size - leave, 0))
+
+
+def _disk_full_error(kind, out_dir, monkeypatch, what):
+    """Make every write of ``what`` ('dataset' or 'figure') into ``out_dir`` fail as the library
+    does on a full disk: netCDF4's RuntimeError('NetCDF: HDF error'), or an OSError (ENOSPC)."""
+    import errno
+
+    import matplotlib.figure
+    import xarray as xr
+
+    def boom():
+        if kind == "RuntimeError":
+            return RuntimeError("NetCDF: HDF error")
+        return OSError(errno.ENOSPC, "No space left on device")
+
+    if what == "dataset":
+        real = xr.Dataset.to_netcdf
+
+        def to_netcdf(self, path=None, *a, **k):
+            if path is not None and Path(path).parent == out_dir:
+                raise boom()
+            return real(self, path, *a, **k)
+
+        monkeypatch.setattr(xr.Dataset, "to_netcdf", to_netcdf)
+    else:
+        real_save = matplotlib.figure.Figure.savefig
+
+        def savefig(self, fname, *a, **k):
+            if Path(fname).parent == out_dir:
+                raise boom()
+            return real_save(self, fname, *a, **k)
+
+        monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+
+
+@pytest.mark.parametrize("kind", ["tmpfs", "RuntimeError", "OSError"])
+def test_full_disk_saves_the_dataset_elsewhere(kind, tmp_path, capsys, monkeypatch):
+    """A dataset that cannot be written on a full disk reaches the fallback (netCDF raises
+    RuntimeError there, not OSError): one line naming where the data went, exit 1."""
+    monkeypatch.setenv("WORKBENCH_FALLBACK", str(tmp_path / "fallback"))
+    with small_filesystem(tmp_path / "small") as small:
+        if kind == "tmpfs":
+            if small is None:
+                pytest.skip("mounting a tmpfs is not permitted here (the injected cases run)")
+            out_dir = small / "out"
+            out_dir.mkdir()
+            fill(small, leave=8192)  # room for the probe file, not for the ~23 kB dataset
+        else:
+            out_dir = tmp_path / "out"
+            _disk_full_error(kind, out_dir, monkeypatch, "dataset")
+        code = cli.main(["run", "ss_curve", "--solver", "analytic", "--out", str(out_dir)])
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+        saved = list((tmp_path / "fallback").glob("ss_curve-*.nc"))
+        assert len(saved) == 1 and str(saved[0]) in err, err
+        assert ("HDF error" in err or "No space left" in err), err
+        ds = results.read(saved[0])
+        assert ds.stress.sel(solver="analytic").max() > 6e8  # the whole dataset (Swift ~700 MPa)
+        assert not list(out_dir.glob("*.nc")) and not list(out_dir.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("kind", ["tmpfs", "RuntimeError", "OSError"])
+def test_full_disk_for_the_figures_names_the_dataset(kind, tmp_path, capsys, monkeypatch):
+    """The dataset was written, then the disk filled up: the figure's failure is one line that
+    says where the dataset is, exit 1, no traceback."""
+    with small_filesystem(tmp_path / "small") as small:
+        if kind == "tmpfs":
+            if small is None:
+                pytest.skip("mounting a tmpfs is not permitted here (the injected cases run)")
+            out_dir = small / "out"
+            real_write = results.write
+
+            def write_then_fill(ds, path, *a, **k):
+                where = real_write(ds, path, *a, **k)
+                fill(small)
+                return where
+
+            monkeypatch.setattr(results, "write", write_then_fill)
+        else:
+            out_dir = tmp_path / "out"
+            _disk_full_error(kind, out_dir, monkeypatch, "figure")
+        code = cli.main(["run", "ss_curve", "--solver", "analytic", "--out", str(out_dir)])
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert "figures of ss_curve could not be written" in err
+        assert f"the dataset was saved to {out_dir / 'ss_curve.nc'}" in err
+        assert results.read(out_dir / "ss_curve.nc").stress.sel(solver="analytic").max() > 6e8
 
 
 def test_files_are_synced_before_the_rename(tmp_path, monkeypatch):

@@ -86,12 +86,17 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     # the dataset first (a failed write saves it in a fallback folder and says where:
     # results.SavedElsewhere), then the figures
     saved = results.write(ds, outdir / f"{name}.nc")
-    figures = list(study.plot(ds, outdir))
     rows = study.errors(ds)
     label = getattr(study, "ERROR_LABEL", "max relative error [-]")
-    if rows:
-        figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
-                                              outdir / f"{name}_accuracy_vs_cost.png", label))
+    try:  # a figure that cannot be written (full disk): one line saying where the dataset is
+        figures = list(study.plot(ds, outdir))
+        if rows:
+            figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
+                                            outdir / f"{name}_accuracy_vs_cost.png", label))
+    except results.WRITE_ERRORS as err:
+        raise results.FiguresFailed(f"the figures of {name} could not be written in {outdir} "
+                                    f"({results.why(err)}); the dataset was saved to {saved}",
+                                    saved) from None
     gates = study.gates(ds)
     section = dict(name=name, gates=gates, rows=rows, figures=figures, error_label=label,
                    verdict="PASS" if all(g.passed for g in gates) else "FAIL", dataset=ds,
