@@ -20,7 +20,9 @@ on disk), its result then cached under the same key as the run without fields.
 
 No lost work: a run is in the cache as soon as it finishes (written to a temporary file, synced,
 renamed), before the next one starts, so a sweep that is interrupted (Ctrl-C) or killed resumes
-from the cache when the same command is run again; a result served from the cache carries
+from the cache when the same command is run again (a Ctrl-C always stops the sweep, even where
+numba turns it into a ``SystemError`` or a solver into an error status:
+:func:`studies.common.catching_interrupts`); a result served from the cache carries
 ``cached = True``. :func:`recording` collects, for the tasks finished inside it, whether each came
 from the cache and its set-up and JIT times (the CLI prints them beside each run's wall time).
 
@@ -41,7 +43,7 @@ from workbench import progress as bars
 from workbench import runcache
 from workbench.runcache import cache_dir  # noqa: F401 - where the CLI says finished runs are
 
-from .common import SOLVER_ENTRY, run_solver, summary_status
+from .common import SOLVER_ENTRY, catching_interrupts, run_solver, summary_status
 
 log = logging.getLogger("workbench")
 FIELD_OPTIONS = ("fields", "field_frames")
@@ -171,7 +173,7 @@ def run_tasks(tasks: list[Task], scheduler: str | None = None, title: str = "swe
     results: list[dict | None] = [None] * len(tasks)
     progress = Progress(len(tasks), title)
     try:
-        with bars.logging_through_bars():
+        with bars.logging_through_bars(), catching_interrupts():  # Ctrl-C always stops the sweep
             todo = []
             for i, t in enumerate(tasks):
                 hit = None if t.writes_fields else _cache_get(t)

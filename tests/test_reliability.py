@@ -3,9 +3,11 @@ status 2; no finished work is lost (run cache, fallback folder, resume after an 
 kill, fsync before the rename); progress and the solver's own wall time."""
 import contextlib
 import os
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -168,6 +170,108 @@ def test_killed_sweep_resumes_from_the_cache(fake_solver, tmp_path):
     tasks = [sweep.Task.make("fake", Plate(), r, exit_at=9) for r in (1,)]
     out = sweep.run_tasks(tasks, "serial")
     assert CALLS == [] and out[0]["cached"] is True
+
+
+def interrupt_solve(scene, resolution, **options):
+    """A solver in which the user presses Ctrl-C at ``resolution == options['at']``, and which
+    then does what compiled code or a careless solver does with it: ``wrap`` turns it into a
+    SystemError (numba: 'returned a result with an exception set'), ``swallow`` into an error
+    status."""
+    CALLS.append(resolution)
+    if resolution == options["at"]:
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)  # the handler runs here
+        except KeyboardInterrupt as err:
+            if options["how"] == "wrap":
+                raise SystemError("<numba dispatcher> returned a result with an exception set") from err
+            return {"status": "error: SystemError: returned a result with an exception set"}
+    return {"period": float(resolution), "status": "ok"}
+
+
+@pytest.mark.parametrize("how", ["wrap", "swallow"])
+def test_ctrl_c_turned_into_an_error_still_stops_the_sweep(how, fake_solver, monkeypatch):
+    monkeypatch.setitem(common.SOLVER_ENTRY, "interrupt", f"{__name__}:interrupt_solve")
+    tasks = [sweep.Task.make("interrupt", Plate(), r, at=2, how=how) for r in (1, 2, 3)]
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run_tasks(tasks, "serial")
+    assert CALLS == [1, 2]  # stopped: the third run never started
+    assert len(list((fake_solver / "runs").glob("*.pkl"))) == 1  # the finished run is kept
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
+    assert not common.interrupted()
+
+
+def test_interrupted_recognises_a_wrapped_keyboard_interrupt():
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ki:
+            raise SystemError("returned a result with an exception set") from ki
+    except SystemError as err:
+        assert common.interrupted(err)
+    assert not common.interrupted(SystemError("another cause"))
+
+
+SPIN_SCRIPT = """
+import sys, time
+sys.path.insert(0, {root!r})
+import numba
+from studies import common, sweep
+import workbench.app.verify as verify
+from workbench.app import cli
+from workbench.scenes import Plate
+
+
+@numba.njit
+def spin(n):
+    s = 0.0
+    for i in range(n):
+        s += (i % 7) * 1e-9
+    return s
+
+
+def spin_solve(scene, resolution, **options):
+    print("run", resolution, flush=True)
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < (0.2 if resolution == 1 else 60.0):
+        spin(20_000_000)  # ~20 ms of compiled loop per call
+    return {{"status": "ok", "period": 1.0}}
+
+
+spin(10)  # compiled before the sweep
+common.SOLVER_ENTRY["spin"] = "__main__:spin_solve"
+verify.run_study = lambda *a, **k: sweep.run_tasks(
+    [sweep.Task.make("spin", Plate(), r) for r in (1, 2, 3)], "serial")
+sys.exit(cli.main(["run", "ss_curve", "--solver", "analytic", "--out", {out!r}]))
+"""
+
+
+def test_ctrl_c_during_a_compiled_loop_exits_130(tmp_path):
+    """A real SIGINT to a process running a numba loop inside a sweep: the sweep stops, the
+    finished run is kept, exit status 130 and one 'interrupted' line."""
+    script = tmp_path / "spin.py"
+    script.write_text(SPIN_SCRIPT.format(root=str(Path(__file__).resolve().parent.parent),
+                                         out=str(tmp_path / "out")))
+    env = dict(os.environ, WORKBENCH_CACHE=str(tmp_path / "cache"))
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        lines = []
+        for line in p.stdout:
+            lines.append(line.strip())
+            if line.strip() == "run 2":
+                break
+        time.sleep(0.5)  # inside the compiled loop of the second run
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert lines == ["run 1", "run 2"] and "run 3" not in out, (lines, out)
+    assert p.returncode == 130, err
+    assert err.strip().count("\n") == 0 and "interrupted" in err and "Traceback" not in err, err
+    assert len(list((tmp_path / "cache" / "runs").glob("*.pkl"))) == 1
 
 
 def test_ctrl_c_in_the_cli_says_how_to_resume(tmp_path, capsys, monkeypatch):

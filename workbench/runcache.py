@@ -80,6 +80,10 @@ def _tree_hash(root: str) -> str:
 def _module_root(module: str) -> Path:
     """The directory of the top-level package of ``module`` (or its file, for a plain module)."""
     top = module.split(".")[0]
+    loaded = sys.modules.get(top)
+    if getattr(loaded, "__file__", None):  # imported already (``__main__`` included)
+        origin = Path(loaded.__file__).resolve()
+        return origin.parent if hasattr(loaded, "__path__") else origin
     spec = importlib.util.find_spec(top)
     if spec is None or spec.origin in (None, "built-in", "frozen"):
         raise ValueError(f"solver package {top!r} has no source to hash")
