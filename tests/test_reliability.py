@@ -476,3 +476,50 @@ def test_driver_reports_its_own_time_apart_from_setup_and_jit():
     assert 0 <= out["jit_time"] <= out["loop_time"]
     assert out["wall_time"] == pytest.approx(out["loop_time"] - out["jit_time"])
     assert out["total_time"] >= out["setup_time"] + out["loop_time"]
+
+
+# -- errors inside a user's scene file -----------------------------------------------------------
+
+@pytest.mark.parametrize("edit,cause", [
+    (("length=self.H,", "length=self.H + undefined_name,"), "NameError: name 'undefined_name'"),
+    (("rho=1000.0", "rho=-1000.0"), "ValueError: rho: -1000.0 kg/m^3 is not allowed"),
+    (("nu=0.3", "nu=0.5"), "ValueError: nu: 0.5 is not allowed"),
+    (("def model(self, spacing=None):", "def model(self, spacing=None):\n        1 / 0"),
+     "ZeroDivisionError"),
+])
+@pytest.mark.parametrize("command", ["list", "run"])
+def test_an_error_in_a_users_model_is_one_line(command, edit, cause, tmp_path, capsys, monkeypatch):
+    """An exception inside model() of a user's scene file (the material library's own refusals
+    included) under `list` and `run`: one line naming the file, the line and the cause, exit 2,
+    before any work."""
+    from test_run_cache import SCENE_FILE
+
+    text = SCENE_FILE.format(length=0.16, gravity=-9.81)
+    assert edit[0] in text
+    text = text.replace(edit[0], edit[1])
+    path = tmp_path / "my_beam.py"
+    path.write_text(text)
+    line = next(i for i, t in enumerate(text.splitlines(), 1)
+                if edit[1].splitlines()[-1].strip() in t)
+    argv = ["list", str(path)] if command == "list" else [
+        "run", str(path), "--solver", "csph", "--resolution", "3", "--out", str(tmp_path / "out")]
+    err = _refused(argv, capsys, monkeypatch, cause)
+    assert f"scene file: {path} line {line}: model() failed" in err, err
+
+
+def test_an_error_in_a_users_scene_class_names_its_line(tmp_path, capsys, monkeypatch):
+    from test_run_cache import SCENE_FILE
+
+    text = SCENE_FILE.format(length=0.16, gravity=-9.81).replace(
+        "    def model(self, spacing=None):",
+        "    def __post_init__(self):\n        raise RuntimeError('refused')\n\n"
+        "    def model(self, spacing=None):")
+    path = tmp_path / "my_beam.py"
+    path.write_text(text)
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if "refused" in t)
+    err = _refused(["list", str(path)], capsys, monkeypatch, "RuntimeError: refused")
+    assert f"scene file: {path} line {line}: MyBeam() failed" in err, err
+    # an error at import names its line too
+    path.write_text("import math\n\nx = undefined_at_import\n")
+    err = _refused(["list", str(path)], capsys, monkeypatch, "NameError")
+    assert f"scene file: {path} line 3 could not be loaded" in err, err

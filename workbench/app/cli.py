@@ -49,7 +49,9 @@ def cmd_list(args) -> int:
 
     if args.file:
         cls = load_scene(args.file)
-        print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(cls()))}")
+        scene = user_code(args.file, cls)
+        user_code(args.file, scene.model)
+        print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(scene))}")
         print(f"  {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
         _print_parameters(cls)
         return 0
@@ -85,7 +87,8 @@ def load_scene(spec: str):
     try:
         spec_.loader.exec_module(mod)
     except Exception as err:
-        raise UsageError(f"scene file: {path} could not be loaded ({type(err).__name__}: {err})") from None
+        raise UsageError(f"scene file: {path}{_line_in(p, err)} could not be loaded "
+                         f"({type(err).__name__}: {err})") from None
     found = {n: c for n, c in vars(mod).items() if inspect.isclass(c) and issubclass(c, Scene)
              and c is not Scene and c.__module__ == mod_name}
     if cls_name:
@@ -97,6 +100,37 @@ def load_scene(spec: str):
         raise UsageError(f"scene file: {path} defines {len(found)} Scene subclasses "
                          f"({', '.join(found) or 'none'}); name one as {path}:ClassName")
     return next(iter(found.values()))
+
+
+def _line_in(path: Path, err: BaseException) -> str:
+    """' line N': the last line of the file ``path`` the error passed through (the line of the
+    user's code that failed, or that called the library that refused it); '' if none."""
+    target = path.resolve()
+    line = getattr(err, "lineno", None) if isinstance(err, SyntaxError) else None
+    tb = err.__traceback__
+    while tb is not None:
+        try:
+            if Path(tb.tb_frame.f_code.co_filename).resolve() == target:
+                line = tb.tb_lineno
+        except OSError:  # pragma: no cover - a frame without a file
+            pass
+        tb = tb.tb_next
+    return f" line {line}" if line else ""
+
+
+def user_code(spec: str, fn, *args):
+    """``fn(*args)`` for code of the user's scene file ``spec`` (its class, ``model()``): any
+    exception becomes one line naming the file, the line and the cause (UsageError, exit 2).
+    A bad ``--set`` value (ParameterError) keeps its own message."""
+    path = Path(spec.partition(":")[0])
+    try:
+        return fn(*args)
+    except ParameterError:
+        raise
+    except Exception as err:
+        name = getattr(fn, "__name__", "the scene")
+        raise UsageError(f"scene file: {path}{_line_in(path, err)}: {name}() failed "
+                         f"({type(err).__name__}: {err})") from None
 
 
 def _scene_solvers(scene) -> tuple:
@@ -132,7 +166,9 @@ def _validated(args):
     if is_scene_file(args.study):
         from studies import scene as study
 
-        scene = with_overrides(load_scene(args.study)(), _parse_sets(args.set))
+        cls = load_scene(args.study)
+        scene = with_overrides(user_code(args.study, cls), _parse_sets(args.set))
+        user_code(args.study, scene.model)  # an error in the user's model(): one line, exit 2
         allowed = _scene_solvers(scene)
     else:
         try:
