@@ -523,3 +523,95 @@ def test_an_error_in_a_users_scene_class_names_its_line(tmp_path, capsys, monkey
     path.write_text("import math\n\nx = undefined_at_import\n")
     err = _refused(["list", str(path)], capsys, monkeypatch, "NameError")
     assert f"scene file: {path} line 3 could not be loaded" in err, err
+
+
+# -- a probe point outside the body --------------------------------------------------------------
+
+@pytest.mark.parametrize("solver", ["csph", "hpm", "fem"])
+def test_a_probe_outside_the_body_is_refused_up_front(solver, tmp_path, capsys, monkeypatch):
+    """A Point set beyond the beam's end (X = 0.2 m on a 0.16 m beam): refused before any run,
+    one line naming the set and the point, exit 2 — for the particle methods as for the FEM
+    (which read the nearest particle before)."""
+    from test_run_cache import SCENE_FILE
+
+    text = SCENE_FILE.format(length=0.16, gravity=-9.81).replace(
+        'Set("tip", Point((0.16, 0.0)))', 'Set("tip", Point((0.2, 0.0)))')
+    assert "Point((0.2, 0.0))" in text
+    path = tmp_path / "my_beam.py"
+    path.write_text(text)
+    err = _refused(["run", str(path), "--solver", solver, "--resolution", "3", "--out",
+                    str(tmp_path / "out")], capsys, monkeypatch,
+                   "set 'tip': the point (0.2, 0.0) m lies outside the body")
+    assert "allowed: a point inside or on the boundary" in err
+
+
+def test_a_probe_on_the_boundary_or_in_its_region_is_accepted():
+    from workbench.materials import Material
+    from workbench.scenes import SceneError
+    from workbench.scenes import model as M
+    from workbench.scenes.shapes import Box, Point
+
+    mat = Material.svk(E=1e7, nu=0.3, rho=1000.0)
+    regions = [M.Region("a", Box((0, 0), (1.0, 0.1)), mat), M.Region("b", Box((1, 0), (2.0, 0.1)), mat)]
+
+    def model(p, region=None):
+        return M.Model(dim=2, length=0.1, regions=regions, sets=[M.Set("p", Point(p), region=region)],
+                       drive=M.Static((1.0,)), observables=[M.Displacement("u", "p", 0)])
+
+    model((1.0 + 0.1 - 0.1, 0.1))  # on the boundary, placed with round-off
+    model((1.5, 0.05))
+    with pytest.raises(SceneError, match="set 'p': the point .* lies outside region 'a'"):
+        model((1.5, 0.05), region="a")
+    with pytest.raises(SceneError, match="has 3 coordinates in a 2-D model"):
+        model((1.5, 0.05, 0.0))
+
+
+# -- the stability study's exit status ------------------------------------------------------------
+
+def _stability_section(status, gate_passed=True):
+    """A stability dataset of the study's shape (solver x scene x dt_factor) with the given
+    statuses (every other run ok), as run_study returns it: the CLI's verdict alone is tested
+    (the study itself is long)."""
+    import xarray as xr
+
+    from studies import stability
+
+    solvers, scenes, factors = ["hpm", "sph"], ["ring", "slab"], [0.5, 0.9, 1.1]
+    st = np.full((2, 2, 3), "ok", dtype=object)
+    for (s, sc, f), v in status.items():
+        st[solvers.index(s), scenes.index(sc), factors.index(f)] = v
+    ds = xr.Dataset({"status": (("solver", "scene", "dt_factor"), st.astype(str), {"units": "-"})},
+                    coords={"solver": solvers, "scene": scenes, "dt_factor": factors})
+    gate = common.Gate.expect("stability: sph ring at dt factor 0.5", "unstable",
+                              "unstable" if gate_passed else "stable", "clumping")
+    return dict(name="stability", dataset=ds, rows=[], gates=[gate], written="stability.nc"), stability
+
+
+@pytest.mark.parametrize("status,gate_passed,code", [
+    # blown up on purpose above dt_crit, and where the literature predicts it: results, exit 0
+    ({("hpm", "ring", 1.1): "unstable: energy growth at t=0.01", ("sph", "ring", 0.5):
+      "unstable: disorder at t=0.002", ("sph", "slab", 0.9): "unstable: disorder at t=0.01"}, True, 0),
+    # the same runs, a gate failed: exit 1
+    ({("hpm", "ring", 1.1): "unstable: energy growth at t=0.01"}, False, 1),
+    # a run that crashed is a failed run whatever the gates say
+    ({("hpm", "ring", 1.1): "unstable: energy growth at t=0.01",
+      ("hpm", "slab", 0.5): "error: FloatingPointError: boom"}, True, 1),
+])
+def test_stability_exit_status_follows_its_gates(status, gate_passed, code, tmp_path, capsys,
+                                                monkeypatch):
+    import workbench.app.verify as verify
+
+    section, stability = _stability_section(status, gate_passed)
+    monkeypatch.setattr(verify, "run_study", lambda *a, **k: section)
+    assert cli.main(["run", "stability", "--quick", "--out", str(tmp_path)]) == code
+    out = capsys.readouterr().out
+    assert f"runs that did not end ok ({len(status)})" in out
+    if ("hpm", "ring", 1.1) in status:
+        assert "hpm ring dt factor 1.1" in out and "expected: above dt_crit (dt factor 1.1 > 1)" in out
+    if ("sph", "ring", 0.5) in status:
+        assert "expected: Eulerian kernel: particle clumping" in out
+    if ("hpm", "slab", 0.5) in status:
+        assert "[FAILED]" in out and "failed runs: ['hpm slab dt factor 0.5']" in out
+    else:
+        assert "failed runs" not in out
+    assert stability.expected_instability("hpm", "ring", 0.9) == ""  # not predicted at 0.9

@@ -211,11 +211,29 @@ def cmd_run(args) -> int:
         print("  " + g.line())
     if is_scene_file(args.study):
         _print_observables(ds, info)
+    if hasattr(study, "run_outcomes"):  # the study says which runs that did not end ok are results
+        return _judged_by_study(study.run_outcomes(ds), section["gates"])
     bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel()
            if not (str(s).startswith("ok") or str(s) == "not run")]
     if bad:
         print(f"  failed runs: {sorted(set(bad))}")
     return 1 if bad else 0
+
+
+def _judged_by_study(outcomes: list[dict], gates) -> int:
+    """Print the runs that did not end ok, each marked expected (and why) or not, and return the
+    exit status of a study that judges its own runs (the stability map: an instability is a
+    result): 1 when a gate failed or a run failed (an error), else 0."""
+    if outcomes:
+        print(f"  runs that did not end ok ({len(outcomes)}):")
+    for o in outcomes:
+        mark = ("FAILED" if o["failed"] else
+                f"expected: {o['expected']}" if o["expected"] else "not expected; judged by the gates")
+        print(f"    {o['run']:<32} {o['status']}  [{mark}]")
+    failed = [o["run"] for o in outcomes if o["failed"]]
+    if failed:
+        print(f"  failed runs: {failed}")
+    return 1 if failed or not all(g.passed for g in gates) else 0
 
 
 def _cost_note(rec) -> str:
