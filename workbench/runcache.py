@@ -77,16 +77,20 @@ def _tree_hash(root: str) -> str:
     return h.hexdigest()
 
 
-def _module_root(module: str) -> Path:
-    """The directory of the top-level package of ``module`` (or its file, for a plain module)."""
+def _module_root(module: str) -> Path | None:
+    """The directory of the top-level package of ``module`` (or its file, for a plain module);
+    None where it has no source (a solver entry that does not import: its run fails, uncached)."""
     top = module.split(".")[0]
     loaded = sys.modules.get(top)
     if getattr(loaded, "__file__", None):  # imported already (``__main__`` included)
         origin = Path(loaded.__file__).resolve()
         return origin.parent if hasattr(loaded, "__path__") else origin
-    spec = importlib.util.find_spec(top)
+    try:
+        spec = importlib.util.find_spec(top)
+    except (ImportError, ValueError):
+        spec = None
     if spec is None or spec.origin in (None, "built-in", "frozen"):
-        raise ValueError(f"solver package {top!r} has no source to hash")
+        return None
     origin = Path(spec.origin).resolve()
     return origin.parent if spec.submodule_search_locations else origin
 
@@ -123,8 +127,10 @@ def code_hash(solver_modules, scene) -> str:
     """SHA-256 (24 hex digits) of the code that decides a run's result (module doc): the packages
     of ``solver_modules`` (module names, e.g. ``("sph",)``), the core without the application, the
     scene's own source files (their bytes, wherever they lie) and the library versions."""
-    roots = {_CORE} | {_module_root(m) for m in solver_modules}
+    found = {m: _module_root(m) for m in solver_modules}
+    roots = {_CORE} | {r for r in found.values() if r is not None}
     h = hashlib.sha256()
+    h.update(" ".join(sorted(m for m, r in found.items() if r is None)).encode())
     for root in sorted(roots):
         h.update(_tree_hash(str(root)).encode())
     for p in scene_sources(scene):
