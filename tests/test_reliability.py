@@ -615,3 +615,46 @@ def test_stability_exit_status_follows_its_gates(status, gate_passed, code, tmp_
     else:
         assert "failed runs" not in out
     assert stability.expected_instability("hpm", "ring", 0.9) == ""  # not predicted at 0.9
+
+
+@pytest.mark.parametrize("kind", ["tmpfs", "OSError"])
+def test_full_disk_for_the_report_names_the_datasets(kind, tmp_path, capsys, monkeypatch):
+    """`workbench verify` on a disk that fills up after the datasets: the report's failure is one
+    line naming where the datasets are, exit 1, no traceback."""
+    import errno
+
+    import workbench.app.verify as verify
+
+    def section(name, outdir, *a, **k):
+        return dict(name=name, gates=[], rows=[], figures=[], error_label="-", verdict="PASS",
+                    dataset=None, written=Path(outdir) / f"{name}.nc", notes=[])
+
+    monkeypatch.setattr(verify, "run_study", section)
+    with small_filesystem(tmp_path / "small") as small:
+        if kind == "tmpfs":
+            if small is None:
+                pytest.skip("mounting a tmpfs is not permitted here (the OSError case runs)")
+            out_dir = small / "out"
+            real = verify.run_study
+
+            def then_fill(name, outdir, *a, **k):
+                got = real(name, outdir, *a, **k)
+                fill(small)
+                return got
+
+            monkeypatch.setattr(verify, "run_study", then_fill)
+        else:
+            out_dir = tmp_path / "out"
+            real_open = open
+
+            def no_space(file, mode="r", *a, **k):
+                if "w" in mode and Path(file).parent == out_dir:
+                    raise OSError(errno.ENOSPC, "No space left on device")
+                return real_open(file, mode, *a, **k)
+
+            monkeypatch.setattr("builtins.open", no_space)
+        code = cli.main(["verify", "--quick", "--out", str(out_dir)])
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert f"the report could not be written in {out_dir}" in err and "No space left" in err
+        assert "the datasets were saved to " in err and str(out_dir / "plate.nc") in err

@@ -50,8 +50,9 @@ class SavedElsewhere(OSError):
         self.fallback = fallback
 
 
-class FiguresFailed(OSError):
-    """A study's figures could not be written; its dataset is at ``saved`` (the message says)."""
+class PartlyWritten(OSError):
+    """A study's dataset was written (at ``saved``) but its figures or the report could not be;
+    the one-line message names where the data is."""
 
     def __init__(self, message: str, saved: Path):
         super().__init__(message)

@@ -341,7 +341,7 @@ def main(argv=None) -> int:
     except (UsageError, ParameterError) as err:
         print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
         return 2
-    except (results.SavedElsewhere, results.WriteFailed, results.FiguresFailed) as err:
+    except (results.SavedElsewhere, results.WriteFailed, results.PartlyWritten) as err:
         print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -94,7 +94,7 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
             figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
                                             outdir / f"{name}_accuracy_vs_cost.png", label))
     except results.WRITE_ERRORS as err:
-        raise results.FiguresFailed(f"the figures of {name} could not be written in {outdir} "
+        raise results.PartlyWritten(f"the figures of {name} could not be written in {outdir} "
                                     f"({results.why(err)}); the dataset was saved to {saved}",
                                     saved) from None
     gates = study.gates(ds)
@@ -171,7 +171,13 @@ def verify(outdir="results", quick: bool = False, scheduler: str | None = None,
                                   **fields))
         for g in sections[-1]["gates"]:
             log.info("%s", g.line())
-    md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
+    try:
+        md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
+    except results.WRITE_ERRORS as err:  # a full disk: one line naming where the datasets are
+        saved = ", ".join(str(s["written"]) for s in sections)
+        raise results.PartlyWritten(f"the report could not be written in {outdir} "
+                                    f"({results.why(err)}); the datasets were saved to {saved}",
+                                    Path(outdir)) from None
     failed = [g for s in sections for g in s["gates"] if not g.passed]
     print(f"report: {md} ({len(failed)} gate(s) failed)")
     return 1 if failed else 0
