@@ -71,7 +71,8 @@ class Task:
         return any(k == "fields" and v is not None for k, v in self.options)
 
     def key(self) -> str:
-        """The run cache's key of this run (:func:`workbench.runcache.key`): field output left out."""
+        """The run cache's key of this run (:func:`workbench.runcache.key`); field output is left
+        out."""
         options = {k: v for k, v in self.options if k not in FIELD_OPTIONS}
         return runcache.key(self.solver, self.scene, self.resolution, options,
                             solver_modules(self.solver))

@@ -68,7 +68,8 @@ def model_solve(scene, resolution, **options):
     m = scene.model()
     box = m.regions[0].shape
     return {"status": "ok", "length": float(box.hi[0]) if hasattr(box, "hi") else np.nan,
-            "gravity": float(getattr(m.loads[0], "acceleration", (np.nan,) * 2)[1]), "series": np.arange(4.0) * resolution}
+            "gravity": float(getattr(m.loads[0], "acceleration", (np.nan,) * 2)[1]),
+            "series": np.arange(4.0) * resolution}
 
 
 @pytest.fixture
@@ -220,12 +221,13 @@ def test_an_fem_reference_is_verified_before_it_is_read(monkeypatch, tmp_path):
     _truncate(entry)
     calls = []
     real = fem_reference.model.solve
-    monkeypatch.setattr(fem_reference.model, "solve", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(fem_reference.model, "solve",
+                        lambda *a, **k: calls.append(1) or real(*a, **k))
     assert fem_reference.reference(sc, "period", resolution=2) == pytest.approx(T, rel=1e-12)
     assert calls == [1]
 
 
-# -- the test session's own cache --------------------------------------------------------------------
+# -- the test session's own cache ---------------------------------------------------------------
 
 def test_the_test_session_has_its_own_cache():
     from workbench import results
