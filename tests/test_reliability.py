@@ -543,6 +543,8 @@ def test_a_probe_outside_the_body_is_refused_up_front(solver, tmp_path, capsys, 
                     str(tmp_path / "out")], capsys, monkeypatch,
                    "set 'tip': the point (0.2, 0.0) m lies outside the body")
     assert "allowed: a point inside or on the boundary" in err
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if "return Model(" in t)
+    assert err.startswith(f"workbench: error: scene file: {path} line {line}: model() set 'tip'"), err
 
 
 def test_a_probe_on_the_boundary_or_in_its_region_is_accepted():

@@ -120,17 +120,16 @@ def _line_in(path: Path, err: BaseException) -> str:
 
 def user_code(spec: str, fn, *args):
     """``fn(*args)`` for code of the user's scene file ``spec`` (its class, ``model()``): any
-    exception becomes one line naming the file, the line and the cause (UsageError, exit 2).
-    A bad ``--set`` value (ParameterError) keeps its own message."""
+    exception becomes one line naming the file, the line and the cause (UsageError, exit 2); a
+    model that does not hold together (ParameterError, SceneError) keeps its own words after
+    the file and the line."""
     path = Path(spec.partition(":")[0])
     try:
         return fn(*args)
-    except ParameterError:
-        raise
     except Exception as err:
         name = getattr(fn, "__name__", "the scene")
-        raise UsageError(f"scene file: {path}{_line_in(path, err)}: {name}() failed "
-                         f"({type(err).__name__}: {err})") from None
+        cause = str(err) if isinstance(err, ParameterError) else f"failed ({type(err).__name__}: {err})"
+        raise UsageError(f"scene file: {path}{_line_in(path, err)}: {name}() {cause}") from None
 
 
 def _scene_solvers(scene) -> tuple:
