@@ -9,15 +9,17 @@ and of each of its base classes outside those packages (a user's scene file: its
 with the same class name and parameters but another geometry get different keys, and an edit of
 ``model()`` gives a new key), and the versions of numpy, scipy, numba and scikit-fem. The studies'
 own source (captions, gates, figures) is not part of it: editing a study keeps its cached runs.
+Not covered: another file of the user's own that the scene file imports (only the files of the
+scene's classes are hashed).
 
 **Entry** (:func:`store`): ``<key>.pkl`` in ``$WORKBENCH_CACHE/runs`` (default
 ``~/.cache/particle-workbench/runs``), a header line, the SHA-256 of the payload and the payload
-(a pickle of the key's description and the run's result dict), written to a temporary file, synced
+(a pickle of the key and the run's result dict), written to a temporary file, synced
 and renamed, so a kill leaves the whole entry or none. Only runs whose status is ``ok`` are stored
 (a failure is retried).
 
-**Verified** (:func:`load`): an entry is served only when its header and checksum match, its
-description is the one asked for and its result is a dict with a status; anything else (a flipped
+**Verified** (:func:`load`): an entry is served only when its header and checksum match, its key
+is the one asked for and its result is a dict whose status is ``ok``; anything else (a flipped
 bit, a truncated file, an entry of another shape) is discarded with a one-line warning and the run
 is recomputed. ``WORKBENCH_NO_CACHE=1`` disables the cache.
 
