@@ -7,11 +7,14 @@ the exception into ``status = 'error: …'`` and the sweep goes on.
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import importlib
 import logging
 import math
 import numbers
+import signal
+import threading
 import time
 import traceback
 from dataclasses import dataclass
@@ -47,16 +50,67 @@ def solver_function(name: str):
     return functools.partial(driver.solve, name)
 
 
+_INTERRUPTED = threading.Event()
+"""Set by the SIGINT handler of :func:`catching_interrupts`: the user pressed Ctrl-C."""
+
+
+def interrupted(err: BaseException | None = None) -> bool:
+    """Whether the user pressed Ctrl-C during a run: the flag of :func:`catching_interrupts` is
+    set, or ``err`` is, wraps or was raised while handling a ``KeyboardInterrupt`` (numba turns
+    an interrupt raised inside compiled code into a ``SystemError`` whose ``__cause__`` or
+    ``__context__`` is the ``KeyboardInterrupt``; a solver may also swallow it whole, which only
+    the flag sees)."""
+    if _INTERRUPTED.is_set():
+        return True
+    seen = set()
+    while err is not None and id(err) not in seen:
+        if isinstance(err, KeyboardInterrupt):
+            return True
+        seen.add(id(err))
+        err = err.__cause__ or err.__context__
+    return False
+
+
+@contextlib.contextmanager
+def catching_interrupts():
+    """Within the block (in the main thread, where Python's own SIGINT handler is in place), a
+    Ctrl-C sets the flag :func:`interrupted` reads and then raises ``KeyboardInterrupt`` as
+    Python's handler does, so that an interrupt is honoured even where compiled code or a solver
+    turns it into an error status. The previous handler is restored after."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+
+    def on_sigint(signum, frame):
+        _INTERRUPTED.set()
+        raise KeyboardInterrupt
+
+    _INTERRUPTED.clear()
+    signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        _INTERRUPTED.clear()
+
+
 def run_solver(name: str, scene, resolution: int, **options) -> dict:
     """Call one solver once; never raises for a failed run. Adds ``wall_time`` if the solver did not
-    and a ``status`` (``ok``, ``unstable: …``, ``diverged``, ``error: …``)."""
+    and a ``status`` (``ok``, ``unstable: …``, ``diverged``, ``error: …``). A Ctrl-C is never a
+    failed run: it raises ``KeyboardInterrupt`` (:func:`interrupted`), whatever the solver made
+    of it."""
     t0 = time.perf_counter()
     try:
         _check_memory_of_run(name, scene, resolution)  # refused before it allocates anything
         out = dict(solver_function(name)(scene, resolution, **options))
     except Exception as err:  # a failed run is a result
+        if interrupted(err):
+            raise KeyboardInterrupt from err
         log.debug("%s", traceback.format_exc())
         out = {"status": f"error: {type(err).__name__}: {err}"}
+    if interrupted():  # the solver swallowed the interrupt (an error status, say)
+        raise KeyboardInterrupt
     wall = time.perf_counter() - t0
     out.setdefault("wall_time", wall)
     out.setdefault("status", "ok")

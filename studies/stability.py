@@ -287,6 +287,35 @@ def gates(ds: xr.Dataset) -> list[Gate]:
     return g + theory_gates(ds)
 
 
+def expected_instability(solver: str, scene: str, dt_factor: float) -> str:
+    """Why this study expects the run (``solver`` on ``scene`` at Δt/Δt_crit = ``dt_factor``) to
+    blow up, or '' where it expects none: above Δt_crit (factor > 1) by construction of the
+    ladder and the bisection, and the instabilities the literature predicts (:data:`EXPECTED`)."""
+    if dt_factor > 1.0:
+        return f"above dt_crit (dt factor {dt_factor:g} > 1)"
+    return next((why for s, sc, outcome, why in EXPECTED
+                 if (s, sc, outcome) == (solver, scene, "unstable")), "")
+
+
+def run_outcomes(ds: xr.Dataset) -> list[dict]:
+    """Every run of the map that did not end ``ok``: ``run`` (solver scene dt factor), ``status``,
+    ``expected`` (:func:`expected_instability`, '' where none is expected) and ``failed``. An
+    instability is a result of this study, never a failed run (its gates judge the outcomes the
+    literature predicts); a run that ended in an error is a failed run."""
+    out = []
+    for s in ds.solver.values:
+        for sc in ds.scene.values:
+            for f in ds.dt_factor.values:
+                st = str(ds.status.sel(solver=s, scene=sc, dt_factor=f).values)
+                if st.startswith("ok") or st == "not run":
+                    continue
+                unstable = st.startswith("unstable")
+                out.append(dict(run=f"{s} {sc} dt factor {float(f):g}", status=st,
+                                expected=expected_instability(str(s), str(sc), float(f))
+                                if unstable else "", failed=not unstable))
+    return out
+
+
 def stability_map(ds: xr.Dataset) -> list[list[str]]:
     """The stability map as a table: one row per (solver, scene), one column per time-step factor:
     'stable' with the energy drift, or 'UNSTABLE' with the time and reason."""

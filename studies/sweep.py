@@ -9,8 +9,9 @@
 - or on an existing cluster (``scheduler='tcp://host:8786'``, ``workbench run --scheduler``).
 
 A failed task is a status in its result (``error: …``), never a lost sweep. Finished runs are kept in
-an on-disk cache keyed by the task's parameters and the code version (a hash of the package
-sources), so a re-run reuses them; ``WORKBENCH_CACHE`` moves the cache, ``WORKBENCH_NO_CACHE=1``
+the one run cache (:mod:`workbench.runcache`: keyed by the run spec and a hash of the solver's, the
+core's and the scene's own code, not the studies'; each entry checksummed and verified before it is
+served), so a re-run reuses them; ``WORKBENCH_CACHE`` moves the cache, ``WORKBENCH_NO_CACHE=1``
 disables it.
 
 Field output (``fields=<folder>``, ``field_frames``) is an option that changes no result: it is left
@@ -19,7 +20,9 @@ on disk), its result then cached under the same key as the run without fields.
 
 No lost work: a run is in the cache as soon as it finishes (written to a temporary file, synced,
 renamed), before the next one starts, so a sweep that is interrupted (Ctrl-C) or killed resumes
-from the cache when the same command is run again; a result served from the cache carries
+from the cache when the same command is run again (a Ctrl-C always stops the sweep, even where
+numba turns it into a ``SystemError`` or a solver into an error status:
+:func:`studies.common.catching_interrupts`); a result served from the cache carries
 ``cached = True``. :func:`recording` collects, for the tasks finished inside it, whether each came
 from the cache and its set-up and JIT times (the CLI prints them beside each run's wall time).
 
@@ -30,25 +33,19 @@ scheduler address that cannot be reached, in seconds and in one line, before any
 from __future__ import annotations
 
 import contextlib
-import dataclasses
-import functools
-import hashlib
-import json
 import logging
 import os
-import pickle
 import socket
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 from urllib.parse import urlsplit
 
 from workbench import progress as bars
+from workbench import runcache
+from workbench.runcache import cache_dir  # noqa: F401 - where the CLI says finished runs are
 
-from .common import run_solver, summary_status
+from .common import SOLVER_ENTRY, catching_interrupts, run_solver, summary_status
 
 log = logging.getLogger("workbench")
-PACKAGES = ("workbench", "sph", "fem_reference", "studies")
 FIELD_OPTIONS = ("fields", "field_frames")
 """Solver options that only ask for field output: not part of the cache key (see module doc)."""
 
@@ -74,68 +71,28 @@ class Task:
         return any(k == "fields" and v is not None for k, v in self.options)
 
     def key(self) -> str:
-        options = [list(o) for o in self.options if o[0] not in FIELD_OPTIONS]
-        payload = dict(solver=self.solver, scene=type(self.scene).__name__,
-                       params=dataclasses.asdict(self.scene), resolution=self.resolution,
-                       options=options, code=code_version())
-        return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:24]
+        """The run cache's key of this run (:func:`workbench.runcache.key`); field output is left
+        out."""
+        options = {k: v for k, v in self.options if k not in FIELD_OPTIONS}
+        return runcache.key(self.solver, self.scene, self.resolution, options,
+                            solver_modules(self.solver))
 
 
-@functools.lru_cache(maxsize=1)
-def code_version() -> str:
-    """A hash of every source file of the packages: any edit invalidates the cached runs."""
-    root = Path(__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for pkg in PACKAGES:
-        for p in sorted((root / pkg).rglob("*.py")):
-            h.update(p.relative_to(root).as_posix().encode())
-            h.update(p.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def cache_dir() -> Path | None:
-    if os.environ.get("WORKBENCH_NO_CACHE") == "1":
-        return None
-    base = os.environ.get("WORKBENCH_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "particle-workbench")
-    return Path(base) / "runs"
+def solver_modules(solver: str) -> tuple:
+    """The modules whose package decides the results of ``solver`` (hashed into the cache key):
+    the module of its entry in :data:`studies.common.SOLVER_ENTRY`, ``sph`` for the particle
+    methods."""
+    entry = SOLVER_ENTRY.get(solver)
+    return (entry.split(":")[0],) if entry else ("sph",)
 
 
 def _cache_get(task: Task):
-    d = cache_dir()
-    if d is None:
-        return None
-    p = d / f"{task.key()}.pkl"
-    if not p.exists():
-        return None
-    try:
-        with open(p, "rb") as fh:
-            return pickle.load(fh)
-    except Exception:  # a damaged entry is recomputed
-        return None
+    return runcache.load(task.key())
 
 
 def _cache_put(task: Task, out: dict) -> None:
-    """Store a finished run (synced to disk, then renamed into place: a kill leaves either the
-    whole entry or none). A cache that cannot be written is a warning, never a lost run."""
-    d = cache_dir()
-    if d is None or not str(summary_status(out.get("status", ""))).startswith("ok"):
-        return  # failures are not cached: they are re-tried
-    out = {k: v for k, v in out.items() if k != "cached"}
-    tmp = None
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
-        with os.fdopen(fd, "wb") as fh:
-            pickle.dump(out, fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, d / f"{task.key()}.pkl")
-    except (OSError, pickle.PicklingError) as err:
-        log.warning("run cache %s not written (%s: %s): this run will be recomputed next time",
-                    d, type(err).__name__, err)
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
+    """Store a finished run (:func:`workbench.runcache.store`: only ``ok`` runs, atomically)."""
+    runcache.store(task.key(), out)
 
 
 def execute(task: Task) -> dict:
@@ -217,7 +174,7 @@ def run_tasks(tasks: list[Task], scheduler: str | None = None, title: str = "swe
     results: list[dict | None] = [None] * len(tasks)
     progress = Progress(len(tasks), title)
     try:
-        with bars.logging_through_bars():
+        with bars.logging_through_bars(), catching_interrupts():  # Ctrl-C always stops the sweep
             todo = []
             for i, t in enumerate(tasks):
                 hit = None if t.writes_fields else _cache_get(t)

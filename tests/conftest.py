@@ -8,6 +8,22 @@ from pathlib import Path
 
 import pytest
 
+SESSION_CACHE = "WORKBENCH_TEST_SESSION_CACHE"
+"""Set to the session's own run cache, so that pytest-xdist workers (and subprocesses) share it."""
+
+
+def pytest_configure(config):
+    """The test session uses its own temporary run cache (``WORKBENCH_CACHE``), never the user's:
+    a test then computes every run and FEM reference it reads from the code it tests."""
+    own = os.environ.get(SESSION_CACHE)
+    if not own:
+        own = tempfile.mkdtemp(prefix="workbench-test-cache-")
+        os.environ[SESSION_CACHE] = own
+        config._workbench_session_cache = own  # removed by this process at the end
+    os.environ["WORKBENCH_CACHE"] = own
+    os.environ.pop("WORKBENCH_NO_CACHE", None)
+
+
 VERIFY = pytest.StashKey[dict]()
 """The session's `workbench verify --quick`: started when collection finds a test that needs it,
 so that it runs beside the tests that do not (the main job is a few minutes, mostly one core)."""
@@ -30,6 +46,10 @@ def pytest_collection_modifyitems(session, config, items):
 
 
 def pytest_unconfigure(config):
+    own = getattr(config, "_workbench_session_cache", None)
+    if own is not None:
+        shutil.rmtree(own, ignore_errors=True)
+        os.environ.pop(SESSION_CACHE, None)
     job = config.stash.get(VERIFY, None)
     if job is not None:
         if job["proc"].poll() is None:

@@ -1,6 +1,5 @@
-"""The on-disk cache of FEM reference values."""
+"""The on-disk cache of FEM reference values (runs of the one run cache, workbench.runcache)."""
 import dataclasses
-import json
 
 import numpy as np
 import pytest
@@ -20,10 +19,10 @@ def test_reference_is_computed_once_then_read(tmp_cache, monkeypatch):
     sc = Plate()
     T = fem_reference.reference(sc, "period", resolution=2)
     assert T == pytest.approx(fem_reference.solve(sc, 2, dynamic=False)["period"], rel=1e-12)
-    files = list((tmp_cache / "fem").glob("*.json"))
+    files = list((tmp_cache / "runs").glob("*.pkl"))
     assert len(files) == 1
-    rec = json.loads(files[0].read_text())
-    assert rec["code"] == cache.code_version() and rec["resolution"] == 2
+    rec = cache.record(sc, 2, dynamic=False)
+    assert files[0].stem == rec["key"] and rec["resolution"] == 2 and rec["solver"] == "fem"
 
     def boom(*a, **k):
         raise AssertionError("solve called although the value is cached")

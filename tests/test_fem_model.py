@@ -323,8 +323,6 @@ def _bar(**change):
     (_bar(regions=[M.Region("a", Box((0, 0), (0.03, 0.01)), BLOCK),
                    M.Region("b", Box((0.01, 0), (0.04, 0.01)), BLOCK)]), {},
      "regions 'a' and 'b' overlap"),
-    (_bar(sets=[M.Set("x0", Plane(0, 0.0)), M.Set("x1", Point((0.05, 0.0)))],
-          loads=[M.PointLoad("x1", (0.0, -1.0))]), {}, "set 'x1': the point"),
     (_bar(sets=[M.Set("x0", Plane(0, 0.0)), M.Set("x1", Plane(0, 0.02))]), {},
      "Traction on set 'x1': the set holds no boundary facet"),
     (_bar(constraints=[]), {}, "constraints: the body has no support"),
@@ -336,6 +334,14 @@ def _bar(**change):
 def test_bad_input_is_one_line(scene, options, match):
     with pytest.raises(ValueError, match=match) as err:
         solve_model(scene, 1, **options)
+    assert "\n" not in str(err.value)
+
+
+def test_a_point_outside_the_body_is_refused_with_the_model():
+    # refused when the model is built (workbench.scenes.model), before any method meshes it
+    with pytest.raises(SceneError, match="set 'x1': the point .* lies outside the body") as err:
+        _bar(sets=[M.Set("x0", Plane(0, 0.0)), M.Set("x1", Point((0.05, 0.0)))],
+             loads=[M.PointLoad("x1", (0.0, -1.0))])
     assert "\n" not in str(err.value)
 
 

@@ -48,10 +48,12 @@ def test_cache_reuses_finished_runs_only(fake_solver):
     assert len(CALLS) == 4
 
 
-def test_code_version_is_part_of_the_key(fake_solver, monkeypatch):
+def test_code_hash_is_part_of_the_key(fake_solver, monkeypatch):
+    from workbench import runcache
+
     t = sweep.Task.make("fake", Plate(), 1)
     k1 = t.key()
-    monkeypatch.setattr(sweep, "code_version", lambda: "another")
+    monkeypatch.setattr(runcache, "code_hash", lambda *a: "another")
     assert t.key() != k1
 
 

@@ -50,6 +50,27 @@ class SavedElsewhere(OSError):
         self.fallback = fallback
 
 
+class PartlyWritten(OSError):
+    """A study's dataset was written (at ``saved``) but its figures or the report could not be;
+    the one-line message names where the data is."""
+
+    def __init__(self, message: str, saved: Path):
+        super().__init__(message)
+        self.saved = saved
+
+
+WRITE_ERRORS = (OSError, RuntimeError, ValueError, TypeError)
+"""What a failed write raises: ``OSError`` (no space, no folder, no permission), and the
+libraries' own types for the same causes — netCDF4 raises ``RuntimeError: NetCDF: HDF error`` on a
+full disk, and xarray/matplotlib a ``ValueError`` or ``TypeError`` for what a backend refuses."""
+
+
+def why(err: BaseException) -> str:
+    """One line: the exception's type and cause (the OS's words for an ``OSError``)."""
+    text = (getattr(err, "strerror", None) or str(err) or "no message").strip()
+    return f"{type(err).__name__}: {' '.join(text.split())}"
+
+
 def _fsync_dir(folder: Path) -> None:
     """Make a rename in ``folder`` durable (best effort: not every file system allows it)."""
     try:
@@ -162,9 +183,10 @@ def _netcdf_safe(value):
 
 def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Path:
     """Write ``ds`` to NetCDF atomically (flushed with ``fsync`` before the rename). Every data
-    variable must carry ``units``. If the file cannot be written (an ``OSError``) and
-    ``fallback``, the dataset is written to :func:`fallback_dir` and :class:`SavedElsewhere`
-    names where."""
+    variable must carry ``units``. If the file cannot be written (any of :data:`WRITE_ERRORS`:
+    an ``OSError``, or netCDF's ``RuntimeError`` on a full disk) and ``fallback``, the dataset is
+    written to :func:`fallback_dir` (else the system's temporary folder) and
+    :class:`SavedElsewhere` names where; :class:`WriteFailed` when neither could be written."""
     path = Path(path)
     missing = [k for k, v in ds.data_vars.items() if "units" not in v.attrs]
     if missing:
@@ -175,7 +197,7 @@ def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Pat
         v.attrs = {k: _netcdf_safe(a) for k, a in v.attrs.items()}
     try:
         return _write_atomic(ds, path)
-    except OSError as err:
+    except WRITE_ERRORS as err:
         if not fallback:
             raise
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -183,14 +205,13 @@ def write(ds: xr.Dataset, path: str | os.PathLike, fallback: bool = True) -> Pat
         for folder in (fallback_dir(), Path(tempfile.gettempdir()) / "workbench-unsaved"):
             try:
                 where = _write_atomic(ds, folder / f"{path.stem}-{stamp}{path.suffix}")
-            except OSError:
-                tried.append(str(folder))
+            except WRITE_ERRORS as again:
+                tried.append(f"{folder} ({why(again)})")
                 continue
-            raise SavedElsewhere(f"{path} could not be written ({type(err).__name__}: "
-                                 f"{err.strerror or err}); the dataset was saved to {where}",
-                                 where) from None
-        raise WriteFailed(f"{path} could not be written ({type(err).__name__}: "
-                          f"{err.strerror or err}), nor in {' or '.join(tried)}") from None
+            raise SavedElsewhere(f"{path} could not be written ({why(err)}); the dataset was "
+                                 f"saved to {where}", where) from None
+        raise WriteFailed(f"{path} could not be written ({why(err)}), nor in "
+                          f"{' or '.join(tried)}") from None
 
 
 def _replace_atomically(path: Path, fill) -> Path:

@@ -49,7 +49,9 @@ def cmd_list(args) -> int:
 
     if args.file:
         cls = load_scene(args.file)
-        print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(cls()))}")
+        scene = user_code(args.file, cls)
+        user_code(args.file, scene.model)
+        print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(scene))}")
         print(f"  {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
         _print_parameters(cls)
         return 0
@@ -85,7 +87,8 @@ def load_scene(spec: str):
     try:
         spec_.loader.exec_module(mod)
     except Exception as err:
-        raise UsageError(f"scene file: {path} could not be loaded ({type(err).__name__}: {err})") from None
+        raise UsageError(f"scene file: {path}{_line_in(p, err)} could not be loaded "
+                         f"({type(err).__name__}: {err})") from None
     found = {n: c for n, c in vars(mod).items() if inspect.isclass(c) and issubclass(c, Scene)
              and c is not Scene and c.__module__ == mod_name}
     if cls_name:
@@ -97,6 +100,36 @@ def load_scene(spec: str):
         raise UsageError(f"scene file: {path} defines {len(found)} Scene subclasses "
                          f"({', '.join(found) or 'none'}); name one as {path}:ClassName")
     return next(iter(found.values()))
+
+
+def _line_in(path: Path, err: BaseException) -> str:
+    """' line N': the last line of the file ``path`` the error passed through (the line of the
+    user's code that failed, or that called the library that refused it); '' if none."""
+    target = path.resolve()
+    line = getattr(err, "lineno", None) if isinstance(err, SyntaxError) else None
+    tb = err.__traceback__
+    while tb is not None:
+        try:
+            if Path(tb.tb_frame.f_code.co_filename).resolve() == target:
+                line = tb.tb_lineno
+        except OSError:  # pragma: no cover - a frame without a file
+            pass
+        tb = tb.tb_next
+    return f" line {line}" if line else ""
+
+
+def user_code(spec: str, fn, *args):
+    """``fn(*args)`` for code of the user's scene file ``spec`` (its class, ``model()``): any
+    exception becomes one line naming the file, the line and the cause (UsageError, exit 2); a
+    model that does not hold together (ParameterError, SceneError) keeps its own words after
+    the file and the line."""
+    path = Path(spec.partition(":")[0])
+    try:
+        return fn(*args)
+    except Exception as err:
+        name = getattr(fn, "__name__", "the scene")
+        cause = str(err) if isinstance(err, ParameterError) else f"failed ({type(err).__name__}: {err})"
+        raise UsageError(f"scene file: {path}{_line_in(path, err)}: {name}() {cause}") from None
 
 
 def _scene_solvers(scene) -> tuple:
@@ -132,7 +165,9 @@ def _validated(args):
     if is_scene_file(args.study):
         from studies import scene as study
 
-        scene = with_overrides(load_scene(args.study)(), _parse_sets(args.set))
+        cls = load_scene(args.study)
+        scene = with_overrides(user_code(args.study, cls), _parse_sets(args.set))
+        user_code(args.study, scene.model)  # an error in the user's model(): one line, exit 2
         allowed = _scene_solvers(scene)
     else:
         try:
@@ -175,11 +210,29 @@ def cmd_run(args) -> int:
         print("  " + g.line())
     if is_scene_file(args.study):
         _print_observables(ds, info)
+    if hasattr(study, "run_outcomes"):  # the study says which runs that did not end ok are results
+        return _judged_by_study(study.run_outcomes(ds), section["gates"])
     bad = [str(s) for s in np.atleast_1d(ds["status"].values).ravel()
            if not (str(s).startswith("ok") or str(s) == "not run")]
     if bad:
         print(f"  failed runs: {sorted(set(bad))}")
     return 1 if bad else 0
+
+
+def _judged_by_study(outcomes: list[dict], gates) -> int:
+    """Print the runs that did not end ok, each marked expected (and why) or not, and return the
+    exit status of a study that judges its own runs (the stability map: an instability is a
+    result): 1 when a gate failed or a run failed (an error), else 0."""
+    if outcomes:
+        print(f"  runs that did not end ok ({len(outcomes)}):")
+    for o in outcomes:
+        mark = ("FAILED" if o["failed"] else
+                f"expected: {o['expected']}" if o["expected"] else "not expected; judged by the gates")
+        print(f"    {o['run']:<32} {o['status']}  [{mark}]")
+    failed = [o["run"] for o in outcomes if o["failed"]]
+    if failed:
+        print(f"  failed runs: {failed}")
+    return 1 if failed or not all(g.passed for g in gates) else 0
 
 
 def _cost_note(rec) -> str:
@@ -287,7 +340,7 @@ def main(argv=None) -> int:
     except (UsageError, ParameterError) as err:
         print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
         return 2
-    except (results.SavedElsewhere, results.WriteFailed) as err:
+    except (results.SavedElsewhere, results.WriteFailed, results.PartlyWritten) as err:
         print(f"workbench: error: {_one_line(err)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -86,12 +86,17 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     # the dataset first (a failed write saves it in a fallback folder and says where:
     # results.SavedElsewhere), then the figures
     saved = results.write(ds, outdir / f"{name}.nc")
-    figures = list(study.plot(ds, outdir))
     rows = study.errors(ds)
     label = getattr(study, "ERROR_LABEL", "max relative error [-]")
-    if rows:
-        figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
-                                              outdir / f"{name}_accuracy_vs_cost.png", label))
+    try:  # a figure that cannot be written (full disk): one line saying where the dataset is
+        figures = list(study.plot(ds, outdir))
+        if rows:
+            figures.append(accuracy_vs_cost(rows, f"{name}: accuracy against cost",
+                                            outdir / f"{name}_accuracy_vs_cost.png", label))
+    except results.WRITE_ERRORS as err:
+        raise results.PartlyWritten(f"the figures of {name} could not be written in {outdir} "
+                                    f"({results.why(err)}); the dataset was saved to {saved}",
+                                    saved) from None
     gates = study.gates(ds)
     section = dict(name=name, gates=gates, rows=rows, figures=figures, error_label=label,
                    verdict="PASS" if all(g.passed for g in gates) else "FAIL", dataset=ds,
@@ -166,7 +171,13 @@ def verify(outdir="results", quick: bool = False, scheduler: str | None = None,
                                   **fields))
         for g in sections[-1]["gates"]:
             log.info("%s", g.line())
-    md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
+    try:
+        md, _ = report.write(outdir, sections, quick, time.perf_counter() - t0)
+    except results.WRITE_ERRORS as err:  # a full disk: one line naming where the datasets are
+        saved = ", ".join(str(s["written"]) for s in sections)
+        raise results.PartlyWritten(f"the report could not be written in {outdir} "
+                                    f"({results.why(err)}); the datasets were saved to {saved}",
+                                    Path(outdir)) from None
     failed = [g for s in sections for g in s["gates"] if not g.passed]
     print(f"report: {md} ({len(failed)} gate(s) failed)")
     return 1 if failed else 0

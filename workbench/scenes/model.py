@@ -41,7 +41,11 @@ import numpy as np
 
 from ..materials import Material, MaterialTable
 from .params import SceneError
-from .shapes import Shape
+from .shapes import Point, Shape
+
+POINT_TOL = 1e-9
+"""A point set may lie this far (times the model's ``length``) outside its region: round-off of a
+point placed on the boundary (a tip probe at X = L)."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -393,6 +397,23 @@ class Model:
             object.__setattr__(self, k, tuple(getattr(self, k)))
         self.validate()
 
+    def _check_point(self, s) -> None:
+        """A point set (a probe, a point load) must lie in the body — inside or on the boundary
+        of a region (of its own region, if it names one), to round-off
+        (:data:`POINT_TOL` · ``length``): every method then reads the same place, where the FEM
+        refuses a point outside its mesh and a particle method would read its nearest
+        particle."""
+        p = np.asarray(s.shape.at, float)
+        if p.shape != (self.dim,):
+            raise SceneError(f"set '{s.name}': the point {tuple(p)} has {p.size} coordinates in a "
+                             f"{self.dim}-D model")
+        regions = [r for r in self.regions if s.region is None or r.name == s.region]
+        if not any(bool(r.shape.contains(p[None, :], POINT_TOL * self.length)[0]) for r in regions):
+            where = f"region '{s.region}'" if s.region is not None else "the body (every region)"
+            raise SceneError(f"set '{s.name}': the point {tuple(p.tolist())} m lies outside "
+                             f"{where}; allowed: a point inside or on the boundary of "
+                             f"{'it' if s.region is not None else 'a region'}")
+
     # -- lookups -----------------------------------------------------------------------------
     def region(self, name: str) -> Region:
         for r in self.regions:
@@ -467,6 +488,8 @@ class Model:
             if s.region is not None and s.region not in region_names:
                 raise SceneError(f"set '{s.name}': region '{s.region}' does not exist "
                                  f"(regions: {_names(self.regions)})")
+            if isinstance(s.shape, Point):
+                self._check_point(s)
         for item in self.constraints + self.loads:
             if not isinstance(item, CONSTRAINTS + LOADS):
                 raise SceneError(f"constraints/loads: {item!r} is not a constraint or a load")
