@@ -208,3 +208,39 @@ def test_stability_crashed_run_is_not_an_expected_instability():
     g = {x.name: x for x in stability.gates(ds)}
     assert g["stability: sph ring at dt factor 0.5"].passed
     assert not g["stability: sph slab at dt factor 0.5"].passed
+
+
+# -- the gates of the full runs, on their recorded errors ----------------------------------------
+# The quick run holds a part of the gates; the full runs (too slow for the tests) hold the rest.
+# For those the errors the README and the study modules record are fed three-fold to the study's
+# own tolerance. Where a tripled recorded error still passes, the tolerance is the method's expected
+# error and the recorded error lies far below it (a cancellation the derivation cannot promise):
+# marked, strict, so that the list stays the true one (issue 42's note names each).
+SLIPS = pytest.mark.xfail(strict=True, reason="recorded error far below the method's expected error")
+RECORDED = [
+    ("plate", "TOL_PERIOD_CONSISTENT", 3.05e-4, "csph at H/dx = 10, dynamic (issue 42)"),
+    ("plate", "TOL_PERIOD_CONSISTENT", 3e-4, "hpm_vc at H/dx = 10, modal (README)"),
+    ("plate", "TOL_PERIOD_FINE", 7e-5, "csph at H/dx = 40, modal (tests/test_consistency.py)"),
+    ("plate", "TOL_PERIOD", 1.8e-2, "hpm at H/dx = 10 (README)"),
+    ("plate", "TOL_FEM_THIN_PLATE", 4.7e-3, "FEM at 16 across H (notes.md: 0.2553 s)"),
+    ("cantilever", "TOL_CONSISTENT_FEM", 1.0e-3, "csph at H/dx = 10, largest load (README)"),
+    pytest.param("cantilever", "TOL_CONSISTENT_FEM", 3e-4, "hpm_vc at H/dx = 10 (README)",
+                 marks=SLIPS),
+    ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
+    ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
+    ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam.py)"),
+    pytest.param("rc_beam", "TOL_ENERGY", 3.8e-3, "sph A at 20 mm, the largest (studies/rc_beam.py)",
+                 marks=SLIPS),
+    pytest.param("rc_beam", "TOL_ENERGY", 2e-4, "csph (studies/rc_beam.py)", marks=SLIPS),
+    ("microcantilever", "TOL_SLOPE", 8.6e-3, "csph static H/dx = 15, 3-D, the finest (README)"),
+    ("microcantilever", "TOL_SLOPE", 3.5e-3, "csph static H/dx = 40, 2-D root ladder (README)"),
+    ("microcantilever", "TOL_FIRST_FAILURE", 2.15e-2, "intra, csph static H/dx = 40, 2-D (README)"),
+]
+
+
+@pytest.mark.parametrize("study,tolerance,recorded,source", RECORDED)
+def test_full_run_gates_fail_a_threefold_recorded_error(study, tolerance, recorded, source):
+    tol = getattr(studies.get(study), tolerance)
+    assert recorded <= tol, f"{source}: the recorded error fails the gate itself"
+    assert not Gate.at_most(tolerance, recorded, tol, source).regressed(3.0).passed, \
+        f"{source}: {3 * recorded:.3g} within {tolerance} = {tol:.3g}"
