@@ -44,9 +44,10 @@ TOL_FEM_THIN_PLATE = 0.0075
 # is 2.7 % from thin-plate theory; hpm measures +1.8 %, a tripled 5.4 % fails).
 TOL_PERIOD = 0.03
 # Their amplitude against the FEM's dynamic amplitude: A = V/ω, so the amplitude carries the
-# period's error (3 %) and the peak's shape (the tip history of a nodal method is not the
-# continuum's mode: 2 %): issue 4's 5 %.
-TOL_AMPLITUDE = 0.05
+# period's error (3 %), plus the reference's own: the FEM dynamic run's period error at its mesh
+# against the converged modal period (:func:`_fem_dynamic_error`: 0.12 % at 4 across H in the
+# quick run, 0.04 % at 8). (Was issue 4's 5 %, against hpm's 1.6 %: a tripled 4.7 % passed.)
+TOL_AMPLITUDE = 0.03
 # Energy of the symplectic schemes over the run (two periods, no damping): velocity Verlet's energy
 # error is bounded, O((ω Δt)²) of the energy, with no secular growth (csph 6e-6 at H/Δx = 4,
 # tests/test_csph_plate.py). A conservation gate ("exact" in tests/test_gates.py): the smallest
@@ -67,8 +68,9 @@ GATED = ("csph", "hpm", "hpm_vc")
 TOL_PERIOD_CONSISTENT = 6e-4
 # Their amplitude against the FEM's dynamic amplitude: A = V/ω, the period's error (the finite
 # amplitude is in both runs and cancels: 0.045 %) and the peak's sampling (parabolic refinement of
-# records ~T/200 apart: (π/200)²/2 ≈ 1e-4): 0.06 %. (Was 5 % in the study and 0.3 % in
-# tests/test_csph_plate.py against a measured +0.008 %.)
+# records ~T/200 apart: (π/200)²/2 ≈ 1e-4), plus the reference's own error as above. (Was 5 % in
+# the study and 0.3 % in tests/test_csph_plate.py; measured +0.066 % against the quick run's FEM
+# at 4 across H, whose own error is 0.12 %.)
 TOL_AMPLITUDE_CONSISTENT = 6e-4
 CONSISTENT = ("csph", "hpm_vc")
 # csph at H/Δx = 40 (full ladder): second order from the bulk's 0.04 % at 10 predicts 0.0025 %, the
@@ -189,6 +191,18 @@ def _extrapolated(values, res) -> float:
     return float(v[-1])
 
 
+def _fem_dynamic_error(ds: xr.Dataset) -> float:
+    """The FEM dynamic run's own error (the amplitude gates' reference): its mesh's modal period
+    against the converged one, |T_h − T_0|/T_0, at the rung of its dynamic run (the last with an
+    amplitude); NaN, which fails the gate, where there is none."""
+    fa = ds.amplitude.sel(solver="fem").values
+    ok = np.flatnonzero(np.isfinite(fa))
+    if not ok.size:
+        return float("nan")
+    ref = float(ds.fem_modal_converged)
+    return abs(float(ds.period.sel(solver="fem").values[ok[-1]]) - ref) / ref
+
+
 def errors(ds: xr.Dataset) -> list[dict]:
     ref = float(ds.fem_modal_converged)
     rows = []
@@ -279,12 +293,13 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         g.append(Gate.at_most(f"plate {s} at H/dx = 10: period vs FEM modal period",
                               abs(v - ref) / ref, tol, why, FEM_REFERENCE))
         a = float(ds.amplitude.sel(solver=s, resolution=10))
-        tol, why = ((TOL_AMPLITUDE_CONSISTENT, "A = V/omega: the period's error (both runs carry "
-                     "the same finite amplitude) + the peak's sampling 1e-4")
-                    if s in CONSISTENT else (TOL_AMPLITUDE, "A = V/omega: 3 % period + 2 % "
-                                                            "the peak's shape, issue 4's 5 %"))
+        own = _fem_dynamic_error(ds)
+        tol, why = ((TOL_AMPLITUDE_CONSISTENT, "A = V/omega: the period's error 0.045 % + the "
+                     "peak's sampling 1e-4")
+                    if s in CONSISTENT else (TOL_AMPLITUDE, "A = V/omega: the period's 3 %"))
         g.append(Gate.at_most(f"plate {s} at H/dx = 10: amplitude vs FEM dynamic amplitude",
-                              abs(a - aref) / aref, tol, why, amp_ref))
+                              abs(a - aref) / aref, tol + own,
+                              f"{why}, + the FEM dynamic run's own error {own:.2%}", amp_ref))
         d = float(ds.energy_drift.sel(solver=s, resolution=10))
         g.append(Gate.at_most(f"plate {s} at H/dx = 10: |energy drift| over the run, no damping",
                               abs(d), TOL_DRIFT, "symplectic scheme: bounded energy error "

@@ -122,6 +122,15 @@ contact force that is not equal and opposite, a fraction of the impact's impulse
 # +1.13 % at 0.5 ms at dt_factor 0.3 and 0.1 alike, 12.8 % over the 10 ms), which this tolerance
 # caught.
 TOL_ENERGY = 0.02
+# An exactness (balance-law) gate in tests/test_gates.py: the smallest defect it must catch is that
+# force which does work its stored energy does not see (the volume m_j/ρ_j above): +1.13 % at
+# 0.5 ms, the quick run's window, 12.8 % over the 10 ms. The full run's 2 % is under a third of the
+# latter; over the quick run's first 0.5 ms the issue's 2 % let it pass, so the quick run takes
+# 0.35 %: under a third of the defect there, and above the largest error measured over the whole
+# 10 ms (0.38 %: A at 20 mm, classic SPH), which bounds the maximum over any first part of a run
+# (quick B at 12.5 mm: csph 1.5e-4, sph 1.4e-4). (Was 2 % in the quick run too.)
+TOL_ENERGY_QUICK = 3.5e-3
+ENERGY_DEFECT = {False: 0.128, True: 0.0113}
 # First flexural frequency (gate 2): the issue's bound, 2 %. The two discretisations of one
 # continuum at 12.5 mm: the FEM's quadratic hexahedra are converged to about 0.1 % here; csph's
 # nodal integration is second order, a few tenths of a per cent at H/dx = 8 (the plate's period:
@@ -1053,11 +1062,16 @@ def gates(ds: xr.Dataset) -> list[Gate]:
                               "antisymmetric pair forces, Verlet's trapezoid impulse)",
                               "the impulse of the supports' force, recorded apart from the momenta "
                               "(a balance law, not a solution)", defect=MOMENTUM_DEFECT))
+        quick = bool(ds.attrs.get("quick", 0))
         g.append(Gate.at_most(f"{tag}: energy balance, max over time",
-                              float(ds.energy_balance_error.sel(**sel)), TOL_ENERGY,
+                              float(ds.energy_balance_error.sel(**sel)),
+                              TOL_ENERGY_QUICK if quick else TOL_ENERGY,
+                              "0.35 % over the quick run's 0.5 ms (a third of the m_j/rho_j "
+                              "defect there)" if quick else
                               "issue 12 gate 3: 2 % of the weight's kinetic energy",
                               "the weight's initial kinetic energy against the run's own stored, "
-                              "dissipated and released energies (a balance law)"))
+                              "dissipated and released energies (a balance law)",
+                              defect=ENERGY_DEFECT[quick]))
     return g
 
 

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from sph import driver
-from studies.plate import (TOL_AMPLITUDE, TOL_AMPLITUDE_CONSISTENT, TOL_DRIFT,
-                           TOL_PERIOD_CONSISTENT)
+from studies.plate import TOL_AMPLITUDE_CONSISTENT, TOL_DRIFT, TOL_PERIOD_CONSISTENT
 from workbench.analytic import plate_amplitude
 from workbench.scenes import Plate
 from workbench.scenes.model import Modal
@@ -21,7 +20,7 @@ from workbench.scenes.model import Modal
 # amplitude A ∝ V c0/ω carries the period's error plus the peak's sampling.
 PERIOD_GATE = TOL_PERIOD_CONSISTENT
 AMPLITUDE_GATE = TOL_AMPLITUDE_CONSISTENT
-THIN_PLATE_GATE = TOL_AMPLITUDE  # the linear thin-plate amplitude ignores 2-D and nonlinear effects
+THIN_PLATE_GATE = 0.05  # the linear thin-plate amplitude ignores the 2-D and nonlinear effects
 ENERGY_GATE = TOL_DRIFT  # issue 4: total energy within 0.1 % over two periods without damping
 # The modal period at H/Δx = 20: second order from the bulk's 0.04 % at 10 (free–free beam,
 # tests/test_consistency.py) predicts 0.01 %, the clamped corners' term falls alike (was 5e-4

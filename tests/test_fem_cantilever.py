@@ -19,7 +19,7 @@ from workbench.scenes import Cantilever
 SMALL = 0.00192  # the paper's P = 0.005 N as P L²/(E I)
 SCENE = Cantilever()
 
-# Shear flexibility: the Timoshenko shear term P L/(κ G H) is 1.34 % of the tip deflection for
+# Shear flexibility: the Timoshenko shear term P L/(κ G H) is 1.32 % of the tip deflection for
 # H/L = 1/8, ν = 0.3 (plane strain). The rigid clamp of the continuum restrains warping and the
 # Poisson contraction at the root, which stiffens it by a fraction of that term; the continuum must
 # therefore lie between Euler–Bernoulli and Timoshenko, within the shear term of Timoshenko (the

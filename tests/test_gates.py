@@ -25,19 +25,40 @@ def quick_gates(quick_verify):
     return gates
 
 
+KNOWN_SLIPS = {
+    "plate csph at H/dx = 10: period vs FEM modal period":
+        "the quick run's reference, the FEM extrapolated from 2, 4, 8 elements across H, lies "
+        "0.015 % above the full run's (2 to 16): csph reads +0.016 % against it, +0.0305 % against "
+        "the full one, whose tripled 0.09 % fails TOL_PERIOD_CONSISTENT (test below)",
+    **{f"microcantilever {case} compression H/dx=5: failed particles outside the {where}":
+       "none failed outside the low eps_L's material: a count of zero, which no factor moves; the "
+       "issue's 80 % is the criterion, not an error model"
+       for case, where in (("inter", "grain boundaries"), ("intra", "grains"))},
+    **{f"microcantilever {case} compression H/dx=5: kinetic / elastic energy before the first "
+       "failure": "0.27 % against the issue's 1 % for quasi-static loading, a physical criterion "
+       "(the ramp's start-up transient 4/(omega_1 t)^2 alone is 0.4 %), not an error model"
+       for case in ("inter", "intra")},
+}
+"""Gates of the quick run whose tripled error still passes: the tolerance is the error the method
+should have and the run's error lies far below it (a cancellation no derivation promises); each
+is named in issue 42's note. The set must be exactly this (a gate that joins it, or leaves it,
+fails the test)."""
+
+
 @pytest.mark.parametrize("study", studies.HEADLINE)
 def test_every_gate_fails_a_threefold_regression(quick_gates, study):
     """Each gate passes on the quick run, fails when fed its regression (Gate.regressed: three
     times the error it recorded), and names its reference."""
-    slipped = []
+    slipped = {}
     for g in quick_gates[study]:
         assert g.passed, g.line()
         assert g.kind in ("error", "exact", "order", "outcome"), g
         assert g.reference, f"{g.name}: no word on why its reference is independent"
         r = g.regressed(3.0)
         if r.passed:
-            slipped.append(f"{g.name}: {g.kind} {r.observed:.3g} within {g.tolerance:.3g}")
-    assert not slipped, "\n".join(slipped)
+            slipped[g.name] = f"{g.kind} {r.observed:.3g} within {g.tolerance:.3g}"
+    known = {k: v for k, v in KNOWN_SLIPS.items() if k.startswith(study)}
+    assert set(slipped) == set(known), slipped
 
 
 @pytest.mark.parametrize("study", studies.HEADLINE)
@@ -229,9 +250,6 @@ RECORDED = [
     ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
     ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
     ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam.py)"),
-    pytest.param("rc_beam", "TOL_ENERGY", 3.8e-3, "sph A at 20 mm, the largest (studies/rc_beam.py)",
-                 marks=SLIPS),
-    pytest.param("rc_beam", "TOL_ENERGY", 2e-4, "csph (studies/rc_beam.py)", marks=SLIPS),
     ("microcantilever", "TOL_SLOPE", 8.6e-3, "csph static H/dx = 15, 3-D, the finest (README)"),
     ("microcantilever", "TOL_SLOPE", 3.5e-3, "csph static H/dx = 40, 2-D root ladder (README)"),
     ("microcantilever", "TOL_FIRST_FAILURE", 2.15e-2, "intra, csph static H/dx = 40, 2-D (README)"),
@@ -244,3 +262,16 @@ def test_full_run_gates_fail_a_threefold_recorded_error(study, tolerance, record
     assert recorded <= tol, f"{source}: the recorded error fails the gate itself"
     assert not Gate.at_most(tolerance, recorded, tol, source).regressed(3.0).passed, \
         f"{source}: {3 * recorded:.3g} within {tolerance} = {tol:.3g}"
+
+
+def test_exactness_gates_of_the_full_run_catch_their_defect():
+    """The exactness gates of the full runs fail at a third of the defect they stand guard
+    against (their quick counterparts are fed it in test_every_gate_fails_a_threefold_regression)."""
+    from studies import plate, rc_beam, ss_curve, stability_theory
+
+    for tol, defect in ((rc_beam.TOL_ENERGY, rc_beam.ENERGY_DEFECT[False]),
+                        (rc_beam.TOL_MOMENTUM, rc_beam.MOMENTUM_DEFECT),
+                        (plate.TOL_DRIFT, plate.DRIFT_DEFECT),
+                        (ss_curve.TOL_CONSISTENT, ss_curve.DEFECT),
+                        (stability_theory.TOL_SECULAR, stability_theory.SECULAR_DEFECT)):
+        assert not Gate.at_most("x", 0.0, tol, "r", "ref", defect=defect).regressed().passed, tol
