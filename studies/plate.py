@@ -80,13 +80,13 @@ CONSISTENT = ("csph", "hpm_vc")
 TOL_PERIOD_FINE = 2e-4
 # Observed order over 5 … 40 at least 1.5 (second order expected; nodal integration ~1).
 MIN_ORDER = 1.5
-# Method options of this study: classic SPH on the cell lattice (Gray et al.'s arrangement; the
-# free surfaces half a spacing outside the outermost particles), the others on the node lattice.
 N_GATES = {False: 12, True: 7}
 """Gates of the default run (full, ``--quick``): the FEM against thin-plate theory; period,
 amplitude and energy drift at H/Δx = 10 of csph, hpm and hpm_vc (csph and hpm in the quick
 ladder); csph at H/Δx = 40 and its observed order (full). ``verify`` fails where fewer were
 evaluated."""
+# Method options of this study: classic SPH on the cell lattice (Gray et al.'s arrangement; the
+# free surfaces half a spacing outside the outermost particles), the others on the node lattice.
 OPTIONS = {"sph": {"lattice": "cell"}}  # classic SPH is the baseline: it is expected to fail, not gated
 # The field snapshot of the report: the CSPH series (finest written), deformed particles coloured
 # by the von Mises stress, at the frame of largest displacement.
