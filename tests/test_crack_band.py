@@ -160,9 +160,7 @@ def test_energy_per_crack_area_scales_with_spacing_without_eq5(ladder):
     else:  # as with eq. 5: at least the band, the excess converging to the closed form
         assert np.all(ratio >= 1) and np.all(np.diff(ratio) < 0), per_area
         assert observed_order(dx, ratio - 1) >= MIN_EXCESS_ORDER, (ratio, observed_order(dx, ratio - 1))
-        # the energy scales with the spacing, up to the excess (itself O(dx)): the ratio of the
-        # finest to the coarsest is dx's within the coarsest's excess
-        assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=ratio[0] - 1)
+        assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=0.05)
 
 
 # -- the RC beam study's measure (studies.rc_beam.crack_band_energy) ------------------------------
