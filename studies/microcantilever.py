@@ -1442,7 +1442,8 @@ def static_slope_gates(ds: xr.Dataset) -> list[Gate]:
         f"microcantilever csph static: observed order of the elastic slope's error "
         f"(H/dx = {', '.join(map(str, res))})", float(ds.attrs.get("static_slope_order", np.nan)),
         MIN_ORDER_SHARE * SINGULAR_ORDER,
-        "issue 11 gate 5: converging at the singular order (2 x 0.5445), half of it at least", FEM_REFERENCE))
+        "issue 11 gate 5: converging at the singular order (2 x 0.5445), half of it at least",
+        FEM_REFERENCE))
     return g + finest_slope_gates(ds)
 
 
@@ -1504,7 +1505,8 @@ def finest_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
             f"microcantilever {case} csph static H/dx={r} (the finest): load at the first failure "
             f"in the root region against the FEM's limit",
             float(ds.static_root_error.sel(case=case, static_resolution=r)), TOL_FIRST_FAILURE,
-            "issue 11 gate 1: the load at the first failure within 3 % at the finest resolution", FEM_REFERENCE))
+            "issue 11 gate 1: the load at the first failure within 3 % at the finest resolution",
+            FEM_REFERENCE))
     return g
 
 
@@ -1516,11 +1518,13 @@ def finest_slope_gates(ds: xr.Dataset) -> list[Gate]:
     return [Gate.at_most(
         "microcantilever FEM: the uncertainty of the elastic slope's Richardson limit (singular "
         "against observed order)", float(ds.attrs.get("fem_slope_limit_spread", np.nan)),
-        FEM_SHARE * TOL_SLOPE, "the reference's own error at most half the tolerance it checks", FEM_REFERENCE),
+        FEM_SHARE * TOL_SLOPE, "the reference's own error at most half the tolerance it checks",
+        FEM_REFERENCE),
         Gate.at_most(
         f"microcantilever csph static H/dx={r} (the finest): elastic slope against the FEM's limit",
         float(ds.static_slope_error.sel(static_resolution=r)), TOL_SLOPE,
-        "issue 11 gate 1: the elastic slope within 1 % at the finest resolution", FEM_REFERENCE)]
+        "issue 11 gate 1: the elastic slope within 1 % at the finest resolution",
+        FEM_REFERENCE)]
 
 
 def _slope_tolerance_ds(ds: xr.Dataset, r: int) -> float:
