@@ -145,7 +145,18 @@ def summary_status(status) -> str:
 
 @dataclass
 class Gate:
-    """One accuracy gate: what was compared, the observed value, the tolerance and why."""
+    """One accuracy gate as data: what was compared (``name``), the computed value (``observed``:
+    an error, an order or an outcome), the ``tolerance`` and why (``reason``: the error the method
+    should have), what the value is compared against and why that is independent of what it checks
+    (``reference``), and whether it passed.
+
+    ``kind`` says what a regression is for the gate (tests/test_gates.py feeds every gate one):
+    ``error`` (:meth:`at_most`: an error the method has; three times it must fail), ``exact``
+    (:meth:`at_most` with ``defect``: the method is exact, the observed value is round-off and the
+    tolerance separates it from ``defect``, the smallest error of a method known to be wrong: a
+    third of that must fail), ``order`` (:meth:`at_least`) and ``outcome`` (:meth:`expect`: the
+    other outcome must fail). A gate whose run is missing or gave NaN fails (:meth:`missing`);
+    it never disappears."""
 
     name: str
     observed: float
@@ -153,31 +164,89 @@ class Gate:
     reason: str
     passed: bool
     shown: str = ""  # how a yes/no gate reads in the report (see :meth:`expect`)
+    reference: str = ""
+    kind: str = "error"
+    defect: float = float("nan")
 
     @classmethod
-    def at_most(cls, name: str, observed: float, tolerance: float, reason: str) -> "Gate":
+    def at_most(cls, name: str, observed: float, tolerance: float, reason: str,
+                reference: str = "", defect: float | None = None) -> "Gate":
+        """``observed`` (an error) at most ``tolerance``; NaN fails. ``defect``: see ``exact``."""
+        observed = float(observed)
         ok = bool(np.isfinite(observed) and observed <= tolerance)
-        return cls(name, float(observed), float(tolerance), reason, ok)
+        if defect is None:
+            return cls(name, observed, float(tolerance), reason, ok, reference=reference)
+        return cls(name, observed, float(tolerance), reason, ok, reference=reference,
+                   kind="exact", defect=float(defect))
 
     @classmethod
-    def at_least(cls, name: str, observed: float, bound: float, reason: str) -> "Gate":
+    def at_least(cls, name: str, observed: float, bound: float, reason: str,
+                 reference: str = "") -> "Gate":
         """A lower bound (an observed order of convergence, say)."""
+        observed = float(observed)
         ok = bool(np.isfinite(observed) and observed >= bound)
-        return cls(name, float(observed), float(bound), reason, ok,
-                   shown=f"{observed:.4g} (at least {bound:.4g})")
+        return cls(name, observed, float(bound), reason, ok,
+                   shown=f"{observed:.4g} (at least {bound:.4g})", reference=reference,
+                   kind="order")
 
     @classmethod
-    def expect(cls, name: str, observed: str, expected: str, reason: str) -> "Gate":
+    def expect(cls, name: str, observed: str, expected: str, reason: str,
+               reference: str = "") -> "Gate":
         """A qualitative gate: an observed outcome (e.g. 'stable', 'unstable') against the one the
         literature predicts; ``observed`` is 1 where they differ, 0 where they agree."""
         ok = observed == expected
         return cls(name, 0.0 if ok else 1.0, 0.0, reason, ok,
-                   shown=f"{observed} (expected {expected})")
+                   shown=f"{observed} (expected {expected})", reference=reference, kind="outcome")
+
+    @classmethod
+    def missing(cls, name: str, why: str, tolerance: float, reason: str,
+                reference: str = "") -> "Gate":
+        """A gate whose run is missing, failed or gave no value: it fails (observed NaN) and says
+        why, rather than being left out."""
+        return cls(name, float("nan"), float(tolerance), reason, False,
+                   shown=f"not evaluated: {why}", reference=reference)
+
+    def regressed(self, factor: float = 3.0) -> "Gate":
+        """The same gate fed a regression: an ``error`` gate ``factor`` times its observed error;
+        an ``exact`` gate its ``defect`` over ``factor``; an ``outcome`` gate the other outcome;
+        an ``order`` gate the order less ``log(factor)/log(2)`` (``factor`` times the error at the
+        finest of two rungs a factor 2 apart)."""
+        import dataclasses
+        import math as _m
+
+        if self.kind == "error":
+            value = factor * self.observed
+        elif self.kind == "exact":
+            value = self.defect / factor
+        elif self.kind == "outcome":
+            return dataclasses.replace(self, observed=1.0 - self.observed, passed=not self.passed)
+        else:  # order
+            value = self.observed - _m.log(factor) / _m.log(2.0)
+            return dataclasses.replace(self, observed=value,
+                                       passed=bool(np.isfinite(value) and value >= self.tolerance))
+        return dataclasses.replace(self, observed=value,
+                                   passed=bool(np.isfinite(value) and value <= self.tolerance))
 
     def line(self) -> str:
         mark = "PASS" if self.passed else "FAIL"
         value = self.shown or f"{self.observed:.4g} (tolerance {self.tolerance:.4g})"
         return f"{mark}  {self.name}: {value} — {self.reason}"
+
+
+def planned(status) -> np.ndarray:
+    """Where a study meant to run (its status is anything but 'not run'): a gate on such a run is
+    evaluated whatever the run gave (NaN fails it), never left out."""
+    return np.asarray(status).astype(str) != "not run"
+
+
+def count_gate(study: str, gates: list, declared: int) -> "Gate":
+    """The gate on the gates: at least ``declared`` (the study's ``N_GATES``) were evaluated; fewer
+    means one vanished (a run missing, a branch not taken) and fails."""
+    n = len(gates)
+    return Gate(f"{study}: gates evaluated against the {declared} the study declares", float(n),
+                float(declared), "a gate never disappears: a missing or NaN run fails its gate",
+                n >= declared, shown=f"{n} (declared {declared})",
+                reference="the study's N_GATES, fixed in its module", kind="count")
 
 
 def observed_order(h, err) -> float:

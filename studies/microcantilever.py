@@ -213,6 +213,15 @@ TOL_SLOPE = 0.01
 # The reference's own error: its Richardson error estimate on the finest mesh at most half the
 # tolerance it checks (the smallest e(r) of the csph runs).
 FEM_SHARE = 0.5
+N_GATES = {False: 27, True: 11}
+"""Gates of the default run: the 3-D run (27, README) and ``--quick`` (2-D, H/Δx = 5: the FEM
+ladder, the slope of each case, and four per case: 11). ``verify`` fails where fewer were
+evaluated."""
+FEM_REFERENCE = ("the FEM of the same grains (Q9 / 27-node hexahedra, scikit-fem): another "
+                 "discretisation, sharing with csph the scene and the J2-plus-damage material code "
+                 "(workbench.materials), which is checked apart against the closed-form Swift curve "
+                 "and damage onset on the micro-cantilever's own materials "
+                 "(tests/test_microcantilever_study.py::test_material_code_against_closed_form)")
 # Gate 2 of the issue's gate 1, the load at the first failure (issue 11: 3 % at the finest). The
 # first failure anywhere is at the edges of the rigidly moved patch or at the re-entrant corner
 # under the root, singular points: its FEM load falls without a limit (H/h = 5, 10, 20: inter
@@ -1359,7 +1368,9 @@ def band_gates(ds: xr.Dataset) -> list[Gate]:
             f"microcantilever {case} regularised H/dx={', '.join(str(r) for r in res)} (band "
             f"{band_width(ds) * 1e6:g} um > dx): fracture energy's spread across the ladder "
             f"(max/min - 1)", float(np.max(G) / np.min(G) - 1), TOL_BAND,
-            "issue 11 gate 5: within 10 % across the ladder"))
+            "issue 11 gate 5: within 10 % across the ladder",
+            "the same rule's energy at the other spacings (its closed form b g(eps_L) H, "
+            "4.0-4.1 uJ/m, is reported beside it, not gated: the runs lie 0-12 % above it)"))
     return g
 
 
@@ -1369,7 +1380,8 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         g += fem_gates(ds)
     if "fem_reference_failed" in ds.attrs:
         g.append(Gate.expect("microcantilever gate 1's FEM reference", ds.attrs["fem_reference_failed"],
-                             "computed", "issue 11 gate 1 needs the FEM of the same grains"))
+                             "computed", "issue 11 gate 1 needs the FEM of the same grains",
+                             FEM_REFERENCE))
     three_d = _is_3d(ds)
     if three_d and "static_elastic_slope" in ds and "fem_elastic_slope" in ds:
         g += static_slope_gates(ds)
@@ -1379,22 +1391,31 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         g += band_gates(ds)
     for case, rule, r, sel in _runs(ds):
         tag = f"microcantilever {case} {rule} H/dx={r}"
+        # a balance-law gate: the smallest defect it must catch is a term of the balance lost, the
+        # least of them the energy released by the failures (~10 % of the external work)
+        lost = float(np.nanmax(ds.released_energy.sel(**sel).values)
+                     / np.nanmax(ds.external_work.sel(**sel).values))
         g.append(Gate.at_most(f"{tag}: energy balance, max over time", float(ds.energy_balance_error.sel(**sel)),
-                              TOL_ENERGY, "issue 11 gate 2: 1 % of the external work"))
+                              TOL_ENERGY, "issue 11 gate 2: 1 % of the external work",
+                              "the run's own external work against its kinetic, elastic, plastic "
+                              "and released energies (a balance law)", defect=lost))
         share = float(ds.share_boundaries.sel(**sel))
         share = share if case == "inter" else 1.0 - share
         g.append(Gate.at_most(f"{tag}: failed particles outside the "
                               f"{'grain boundaries' if case == 'inter' else 'grains'}",
                               1.0 - share if np.isfinite(share) else np.nan, 1.0 - MIN_SHARE,
-                              "issue 11 gate 3: at least 80 % where the low eps_L is"))
+                              "issue 11 gate 3: at least 80 % where the low eps_L is",
+                              "the scene's regions (where the low eps_L is), fixed before the run"))
         g.append(Gate.at_most(f"{tag}: kinetic / elastic energy before the first failure",
                               float(ds.kinetic_ratio.sel(**sel)), TOL_QUASI_STATIC,
-                              "issue 11 gate 4: quasi-static loading"))
+                              "issue 11 gate 4: quasi-static loading",
+                              "the run's own elastic energy (a ratio of two energies of the run)"))
         sep = "separated" if float(ds.separated.sel(**sel)) == 1.0 else \
             f"not separated ({ds.status.sel(**sel).values})"
         g.append(Gate.expect(f"{tag}: complete separation, no NaN, no crash", sep, "separated",
                              "the paper's robustness claim: the mean load over the last 20 % of "
-                             "the run within 5 % of the peak load before failure"))
+                             "the run within 5 % of the peak load before failure",
+                             "the run's own peak load before the first failure"))
     return g
 
 
@@ -1416,12 +1437,13 @@ def static_slope_gates(ds: xr.Dataset) -> list[Gate]:
         f"microcantilever csph static H/dx={r}: elastic slope against the FEM's limit",
         float(ds.static_slope_error.sel(static_resolution=r)), _slope_tolerance_ds(ds, r),
         "issue 11 gate 1: max(1 %, the FEM's own error at the same nodal spacing at the singular "
-        "order)") for r in res]
+        "order)", FEM_REFERENCE) for r in res]
     g.append(Gate.at_least(
         f"microcantilever csph static: observed order of the elastic slope's error "
         f"(H/dx = {', '.join(map(str, res))})", float(ds.attrs.get("static_slope_order", np.nan)),
         MIN_ORDER_SHARE * SINGULAR_ORDER,
-        "issue 11 gate 5: converging at the singular order (2 x 0.5445), half of it at least"))
+        "issue 11 gate 5: converging at the singular order (2 x 0.5445), half of it at least",
+        FEM_REFERENCE))
     return g + finest_slope_gates(ds)
 
 
@@ -1452,7 +1474,7 @@ def root_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
             f"microcantilever {case} FEM H/h={fr[-1]}: load at the first failure in the root region, "
             f"error against its Richardson limit (H/h = {', '.join(map(str, fr))})",
             float(ds.fem_root_error.sel(case=case).values[-1]), FEM_SHARE * tol,
-            "the reference's own error at most half the tolerance it checks"))
+            "the reference's own error at most half the tolerance it checks", FEM_REFERENCE))
         for r in res:
             g.append(Gate.at_most(
                 f"microcantilever {case} csph static H/dx={r}: load at the first failure in the root "
@@ -1460,7 +1482,7 @@ def root_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
                 float(ds.static_root_error.sel(case=case, static_resolution=r)),
                 root_tolerance(ds, case, r),
                 "issue 11 gate 1: max(3 %, the FEM's own error at the same nodal spacing at the "
-                "singular order)"))
+                "singular order)", FEM_REFERENCE))
     return g + finest_gates(ds, slope)
 
 
@@ -1478,12 +1500,13 @@ def finest_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
             f"microcantilever {case} FEM: the uncertainty of the root region's first-failure "
             f"load limit (singular against observed order)",
             float(ds.fem_root_limit_spread.sel(case=case)), FEM_SHARE * TOL_FIRST_FAILURE,
-            "the reference's own error at most half the tolerance it checks"))
+            "the reference's own error at most half the tolerance it checks", FEM_REFERENCE))
         g.append(Gate.at_most(
             f"microcantilever {case} csph static H/dx={r} (the finest): load at the first failure "
             f"in the root region against the FEM's limit",
             float(ds.static_root_error.sel(case=case, static_resolution=r)), TOL_FIRST_FAILURE,
-            "issue 11 gate 1: the load at the first failure within 3 % at the finest resolution"))
+            "issue 11 gate 1: the load at the first failure within 3 % at the finest resolution",
+            FEM_REFERENCE))
     return g
 
 
@@ -1495,11 +1518,13 @@ def finest_slope_gates(ds: xr.Dataset) -> list[Gate]:
     return [Gate.at_most(
         "microcantilever FEM: the uncertainty of the elastic slope's Richardson limit (singular "
         "against observed order)", float(ds.attrs.get("fem_slope_limit_spread", np.nan)),
-        FEM_SHARE * TOL_SLOPE, "the reference's own error at most half the tolerance it checks"),
+        FEM_SHARE * TOL_SLOPE, "the reference's own error at most half the tolerance it checks",
+        FEM_REFERENCE),
         Gate.at_most(
         f"microcantilever csph static H/dx={r} (the finest): elastic slope against the FEM's limit",
         float(ds.static_slope_error.sel(static_resolution=r)), TOL_SLOPE,
-        "issue 11 gate 1: the elastic slope within 1 % at the finest resolution")]
+        "issue 11 gate 1: the elastic slope within 1 % at the finest resolution",
+        FEM_REFERENCE)]
 
 
 def _slope_tolerance_ds(ds: xr.Dataset, r: int) -> float:
@@ -1519,13 +1544,13 @@ def fem_gates(ds: xr.Dataset) -> list[Gate]:
         f"microcantilever FEM H/h={int(fr[-1])}: elastic slope's error against its Richardson limit "
         f"(H/h = {', '.join(str(int(r)) for r in fr)}, order {SINGULAR_ORDER:.3g})",
         float(ds.fem_slope_error.values[-1]), FEM_SHARE * tol,
-        "the reference's own error at most half the tolerance it checks"))
+        "the reference's own error at most half the tolerance it checks", FEM_REFERENCE))
     for case, rule, r, sel in _runs(ds):
         g.append(Gate.at_most(
             f"microcantilever {case} {rule} H/dx={r}: elastic slope against the FEM's limit",
             float(ds.slope_error_fem.sel(**sel)), _slope_tolerance_ds(ds, r),
             "issue 11 gate 1: max(1 %, the FEM's own error at the same nodal spacing, "
-            "H/h = H/(2 dx), at the singular order 2*0.5445)"))
+            "H/h = H/(2 dx), at the singular order 2*0.5445)", FEM_REFERENCE))
     return g
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from studies import rc_beam
+from studies.common import observed_order
 from studies.crack_band import crack_band
 from workbench.scenes.crack_band import MortarBar
 from workbench.scenes.rc_beam import PAPER_SPACING
@@ -49,13 +50,20 @@ kernel (support 2.6 Δx) damages the columns beside the band, and its band's fre
 particles lag (truncated kernel) and stop short of full release (damage 0.98), so its softening
 tail creeps on and the energy at the run's end depends on how far the bar is pulled (5 mm: 2.200
 G_F at an opening of 5 ε_0 Δx, 2.322 at 7). For classic SPH the test asks that the excess over
-2 G_F, an artefact of the layers next to the crack and the surface, shrinks as the spacing does
-and that the spacings agree (:data:`TOL_SPREAD`)."""
-TOL_SPREAD = {"csph": 0.01, "sph": 0.05}
+2 G_F, an artefact of the layers next to the crack and the surface, converges to the closed form
+2 G_F as the spacing shrinks (:data:`MIN_EXCESS_ORDER`)."""
+TOL_SPREAD = {"csph": 0.01}
 """The regularisation: the energy per crack area at the three spacings agrees within the part
-that is not the band's (the only part that may depend on the spacing): 1 % (csph), 5 % (sph).
-Without eq. 5 the spacings' energies differ by their spacings' ratio, 1.5 and 2: a regression to a
-fixed release strain fails by 10 to 100 times this."""
+that is not the band's (the only part that may depend on the spacing): 1 % (csph). Without eq. 5
+the spacings' energies differ by their spacings' ratio, 1.5 and 2: a regression to a fixed release
+strain fails by 10 to 100 times this."""
+MIN_EXCESS_ORDER = 0.5
+"""Classic SPH: its energy per crack area above the closed form 2 G_F (the partly damaged columns
+beside the band, a fixed number of particle layers within the kernel's 2.6 Δx, and the band's
+lagging surface particles) falls as the spacing does, first order in Δx (measured with eq. 5:
++10.0, +8.1, +5.5 % at 5, 3.33, 2.5 mm, order 0.87; without it alike), so the value converges to
+the closed form: the excess's observed order, least squares over the three spacings, at least
+half the first order. (It replaces a spread of 5 % across the spacings against 4.2 % observed.)"""
 TOL_LAYER = 0.02
 """Energy of the fully released particles over their volume × g_F: 1 for a particle released
 along one axis; the band's free-surface particles see some shear as the crack opens, and with
@@ -128,10 +136,12 @@ def test_energy_per_crack_area_is_spacing_independent_with_eq5(ladder):
     GF = out[True][0]["G_F"]
     if method == "csph":
         assert per_area / (BAND * GF) == pytest.approx(np.ones(3), abs=TOL_BAND), per_area / GF
-    else:  # at least 2 G_F (the band), the excess shrinking with the spacing
+        assert per_area.max() / per_area.min() - 1 <= TOL_SPREAD[method], per_area / GF
+    else:  # at least 2 G_F (the band), the excess converging to the closed form with the spacing
         excess = per_area / (BAND * GF) - 1
+        dx = np.array([c["spacing"] for c in out[True]])
         assert np.all(excess >= 0) and np.all(np.diff(excess) < 0), per_area / GF
-    assert per_area.max() / per_area.min() - 1 <= TOL_SPREAD[method], per_area / GF
+        assert observed_order(dx, excess) >= MIN_EXCESS_ORDER, (excess, observed_order(dx, excess))
 
 
 def test_energy_per_crack_area_scales_with_spacing_without_eq5(ladder):
@@ -144,11 +154,13 @@ def test_energy_per_crack_area_scales_with_spacing_without_eq5(ladder):
     ratio = per_area / (BAND * GF5 * dx / PAPER_SPACING)
     if method == "csph":
         assert ratio == pytest.approx(np.ones(3), abs=TOL_BAND), per_area
-    else:  # as with eq. 5: at least the band, the excess shrinking with the spacing
+        scaled = per_area * PAPER_SPACING / dx
+        assert scaled.max() / scaled.min() - 1 <= TOL_SPREAD[method], scaled
+        assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=TOL_SPREAD[method])
+    else:  # as with eq. 5: at least the band, the excess converging to the closed form
         assert np.all(ratio >= 1) and np.all(np.diff(ratio) < 0), per_area
-    scaled = per_area * PAPER_SPACING / dx
-    assert scaled.max() / scaled.min() - 1 <= TOL_SPREAD[method], scaled
-    assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=TOL_SPREAD[method])
+        assert observed_order(dx, ratio - 1) >= MIN_EXCESS_ORDER, (ratio, observed_order(dx, ratio - 1))
+        assert per_area[-1] / per_area[0] == pytest.approx(dx[-1] / dx[0], rel=0.05)
 
 
 # -- the RC beam study's measure (studies.rc_beam.crack_band_energy) ------------------------------

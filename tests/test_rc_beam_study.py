@@ -148,17 +148,18 @@ def test_momentum_changes_by_the_supports_impulse(short_b, method):
 @pytest.mark.parametrize("method", ["sph", "csph"])
 def test_energy_balance_within_two_percent(short_b, method):
     """Gate 3: the weight's initial kinetic energy equals kinetic + elastic + contact + plastic +
-    released + viscous within 2 % (studies.rc_beam.TOL_ENERGY) over the run, with the mortar
+    released + viscous within the quick run's 0.35 % (studies.rc_beam.TOL_ENERGY_QUICK: this run
+    is shorter still) over the run, with the mortar
     cracking (released energy > 0) and, in sph, the viscosity dissipating (here 1.8 % of the
     kinetic energy: its own correctness is test_viscous_work_closes_the_kinetic_energy_of_a_viscous_gas)."""
-    from studies.rc_beam import TOL_ENERGY, energy_error
+    from studies.rc_beam import TOL_ENERGY, TOL_ENERGY_QUICK, energy_error
 
     out = short_b[method]
     e0 = float(out["kinetic_energy"][0])
     assert float(out["released_energy"][-1]) > 0
     if method == "sph":
         assert float(out["viscous_dissipation"][-1]) > 0.1 * TOL_ENERGY * e0
-    assert np.max(np.abs(energy_error(out))) <= TOL_ENERGY
+    assert np.max(np.abs(energy_error(out))) <= TOL_ENERGY_QUICK
 
 
 def test_dataset_contract_and_gates(short_b, tmp_path):

@@ -12,10 +12,18 @@ def verified(quick_verify):
 
 
 def test_verify_quick_passes_its_gates(verified):
+    """Exit status 0, no failed gate, and every gate the studies declare evaluated: each study's
+    N_GATES of --quick plus its count gate (a gate that vanished — a missing or NaN run left out —
+    would pass 'no FAIL' and fail this)."""
     out, proc = verified
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     md = (out / "report.md").read_text()
     assert "FAIL" not in md
+    n = sum(studies.get(s).N_GATES[True] + 1 for s in studies.HEADLINE)
+    assert f"{n}/{n} gates passed" in md, md[:400]
+    for s in studies.HEADLINE:
+        declared = studies.get(s).N_GATES[True]
+        assert f"PASS  {s}: gates evaluated against the {declared} the study declares" in md, s
     assert (out / "report.html").read_text().startswith("<!doctype html>")
 
 
