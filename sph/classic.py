@@ -779,6 +779,14 @@ class Body:
 
 
 NAME = "sph"
+DISORDER = 0.15
+"""The η₉₅ limit (:mod:`sph.monitor`) every explicit run of classic SPH is monitored with unless
+its drive sets one (``disorder``; ``math.inf``: off): the method's known failure — particle
+disorder, the kink that folds a clamped beam at its root, clumping under tension — keeps the
+energy balance, so the energy criterion does not see it. 0.15 is the stability scenes' limit
+(:data:`workbench.scenes.stability.DISORDER_TOL`); a smooth deformation gives η ≲ 1e-2 (the
+swinging beam of L/H = 20 at H/Δx = 8: η₉₅ ≤ 0.016 with csph; classic SPH's fold passes 0.15 in
+its first swing and reaches 0.5)."""
 OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 'hyperelastic'",
                alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
                artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)",
