@@ -55,7 +55,8 @@ particle methods' one driver :func:`sph.driver.solve`, with the same result keys
    explicit runs, as there), :class:`MeanStress` (:func:`.observe.mean_stress`),
    :class:`FailedFraction` (elements deleted or failed at every point), :class:`Period` (the crossings of the
    history's own mean, :func:`workbench.oscillation.measure_period`, the particle methods' one
-   definition; NaN with ``<name>_status`` saying why where it does not oscillate).
+   definition; NaN with ``<name>_status`` saying why where it does not oscillate; the studies
+   carry that reason into the run's status, :func:`workbench.oscillation.with_period_notes`).
 
 Not read: regions with the 'concentric' arrangement (a particle arrangement of a ring: refused with
 one line), contact between bodies and models of several bodies (refused), the stability monitor
@@ -92,7 +93,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from workbench.materials import HIST_EPS_P, MaterialTable
-from workbench.oscillation import measure_period, period_amplitude, with_period_notes  # noqa: F401
+from workbench.oscillation import measure_period, period_amplitude  # noqa: F401 (re-exported)
 from workbench.scenes import model as M
 from workbench.scenes.params import SceneError
 from workbench.scenes.shapes import Point
@@ -857,7 +858,6 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
         out[p.name] = m["period"]
         out[f"{p.name}_amplitude"] = m["amplitude"]
         out[f"{p.name}_status"] = m["status"]
-    out["status"] = with_period_notes(status, out, [p.name for p in periods])
     return out
 
 
@@ -969,5 +969,6 @@ def solve(scene, resolution: int, dynamic: bool | None = None, **options) -> dic
         for o in scene.model().observables:
             if isinstance(o, M.Period):
                 out[f"{o.name}_dynamic"] = out.get(o.name, math.nan)
+                out[f"{o.name}_dynamic_status"] = out.pop(f"{o.name}_status", "ok")
                 out[o.name] = out["modal_period"]
     return out

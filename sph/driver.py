@@ -63,7 +63,7 @@ import numpy as np
 
 from workbench import progress
 from workbench.fields import DEFAULT_FRAMES, Snapshots, series_name
-from workbench.oscillation import measure_period, with_period_notes
+from workbench.oscillation import measure_period
 from workbench.scenes import model as M
 from workbench.scenes.params import SceneError
 
@@ -418,9 +418,12 @@ class Run:
                  default_disorder: float | None = None) -> dict:
         """The explicit drive (module docstring). ``default_disorder``: the method's own η₉₅
         limit (its module's ``DISORDER``: classic SPH's known failure, particle disorder, is
-        monitored by default), used where the drive gives none."""
+        monitored by default), used where the drive gives none and every material is elastic
+        (no history): a body that can yield or fail (J2, mortar) disorders by fracturing, which
+        is its result, not a failure of the method."""
         drive = self.model.drive
-        if drive.disorder is None and default_disorder is not None:
+        if (drive.disorder is None and default_disorder is not None
+                and self.ps.table.n_history == 0):
             import dataclasses
 
             drive = dataclasses.replace(drive, disorder=default_disorder)
@@ -623,7 +626,6 @@ class Run:
             out[o.name] = m["period"]
             out[f"{o.name}_amplitude"] = m["amplitude"]
             out[f"{o.name}_status"] = m["status"]
-        out["status"] = with_period_notes(status, out, [o.name for o in periods])
         if dis is not None:
             ok_x = np.isfinite(body.x).all()
             d95, dmax = dis(body.x) if ok_x else (math.nan, math.nan)

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from workbench import analytic, results
+from workbench.oscillation import with_period_notes
 from workbench.scenes import Plate
 
 from .common import Gate, field_options, field_series, observed_order, validate
@@ -107,7 +108,9 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
         for r in ladders[s]:
             j = all_res.index(r)
             out = outs[(s, r)]
-            status[i, j] = out["status"] if isinstance(out["status"], str) else str(out["status"])
+            # a period that could not be measured says why (issue 38.4: no oscillation)
+            status[i, j] = (with_period_notes(out["status"], out, ["period"])
+                            if isinstance(out["status"], str) else str(out["status"]))
             period[i, j] = out.get("period", np.nan)
             amplitude[i, j] = out.get("amplitude", np.nan)
             # the FEM's period is the modal one: its cost is the modal solve's

@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from workbench import results
+from workbench.oscillation import with_period_notes
 from workbench.scenes import model as M
 
 from .common import check_resolutions
@@ -102,6 +103,7 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
         series["period"] = np.full(shp + (n_ax,), np.nan)
     scalars = {}
     notes = {}
+    notes_of = [o.name for o in model.observables if isinstance(o, M.Period)]
     for p in (o for o in model.observables if isinstance(o, M.Period)):
         scalars[p.name] = np.full(shp, np.nan)
         scalars[f"{p.name}_amplitude"] = np.full(shp, np.nan)
@@ -111,7 +113,7 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
             j = all_res.index(r)
             out = outs[(s, r)]
             st = out.get("status", "error: no status")
-            status[i, j] = st if isinstance(st, str) else _summary(st)
+            status[i, j] = with_period_notes(st, out, list(notes_of)) if isinstance(st, str) else _summary(st)
             wall[i, j] = float(np.nanmax(np.atleast_1d(out.get("wall_time", np.nan))))
             npart[i, j] = int(out.get("n_particles", out.get("n_dof", 0)))
             for name, arr in series.items():

@@ -125,3 +125,26 @@ def test_classic_sph_kink_is_caught():
     assert out["status"].startswith("unstable: particle disorder eta95"), out["status"]
     assert " at t=" in out["status"]
     assert out["criterion"] == "disorder"
+
+
+def test_classic_sph_monitors_disorder_of_elastic_bodies_by_default():
+    """The default applies to elastic bodies; a drive's own limit, math.inf (off) included, wins;
+    a body that can yield or fail (its disorder is its fracture) is not monitored by default."""
+    import dataclasses
+    import math
+
+    from sph import driver
+
+    scene = swinging(t_end=0.002)
+    assert "disorder_history" in driver.solve("sph", scene, 2)
+    off = dataclasses.replace(scene.model().drive, disorder=math.inf)
+    assert "disorder_history" not in driver.solve("sph", scene, 2, drive=off)
+    assert "disorder_history" not in driver.solve("csph", scene, 2)
+    namespace = {}
+    plastic = dynamic_source().replace(
+        "Material.svk(E=self.E, nu=0.3, rho=1000.0)",
+        "Material.j2_linear(E=self.E, nu=0.3, sigma_y0=1e9, H=1e6, rho=1000.0)")
+    assert plastic != dynamic_source()
+    exec(compile(plastic, "plastic.py", "exec"), namespace)
+    out = driver.solve("sph", namespace["SwingingCantilever"](t_end=0.002), 2, stress="hyperelastic")
+    assert "disorder_history" not in out

@@ -114,8 +114,9 @@ def period_amplitude(t: np.ndarray, u: np.ndarray, scale: float = 0.0) -> tuple[
 def with_period_notes(status: str, out: dict, names) -> str:
     """A run's ``status`` with the reason of each period (observable ``names``) that has no value
     appended, 'ok (period: no oscillation: …)', where the run itself is ok: a number that cannot
-    be measured is not reported as one, and the status says why. ``out[name + '_status']`` holds
-    each period's own status (:func:`measure_period`)."""
+    be measured is not reported as one, and the status a study stores says why (the solver's
+    own ``status`` stays that of the run; ``out[name + '_status']`` holds each period's own,
+    :func:`measure_period`)."""
     if status != "ok":
         return status
     notes = [f"{n}: {out[f'{n}_status']}" for n in names if out.get(f"{n}_status", "ok") != "ok"]

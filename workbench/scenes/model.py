@@ -266,7 +266,7 @@ class Explicit:
     dissipation is recorded, not flagged); with ``disorder`` (η₉₅ limit),
     particle disorder measured on the set ``disorder_set`` (all particles when None) — None: the
     method's own default (classic SPH monitors its known failure, disorder, at
-    :data:`sph.classic.DISORDER`; the other methods none), ``math.inf``: off.
+    :data:`sph.classic.DISORDER` on elastic materials; the other methods none), ``math.inf``: off.
     ``dt_reference``: what ``dt_factor`` multiplies — 'cfl' (the default: the CFL estimate
     Δx/c_p) or 'spectrum' (the method's critical step 2/ω_max at the initial state,
     :mod:`sph.spectrum`). ``separate`` (two set names) with ``after`` (s): the run stops ``after``
