@@ -779,6 +779,18 @@ class Body:
 
 
 NAME = "sph"
+DISORDER = 0.15
+"""The η₉₅ limit (:mod:`sph.monitor`) every explicit run of classic SPH on elastic materials is
+monitored with unless its drive sets one (``disorder``; ``math.inf``: off). The method's known
+failure — particle disorder: the kink that folds a clamped beam at its root, rows pairing under
+tension or compression — keeps the energy balance, so the energy criterion does not see it. 0.15
+is the stability scenes' limit (:data:`workbench.scenes.stability.DISORDER_TOL`). Measured (issue
+40): a smooth bending gives η₉₅ ≲ 0.02 (the swinging beam of L/H = 8 at H/Δx = 8: ≤ 0.017, the
+plate at H/Δx = 5: 0.044); the swinging beam of L/H = 20 at H/Δx = 8 folds at its root and passes
+0.15 at t ≈ 0.14 s, reaching 0.5; the plate at H/Δx = 10 (cell lattice) pairs its second row
+from the lower surface (η ≈ 0.2 along it, lasting) and stops at t = 0.061 s. A material that
+yields or fails (a history: J2, mortar) disorders by fracturing, which is its result: not
+monitored by default."""
 OPTIONS = dict(h_ratio="h/Δx (default 1.3)", stress="'hypoelastic' (default) | 'hyperelastic'",
                alpha="Monaghan viscosity α (default 1)", beta="Monaghan viscosity β (default 1)",
                artificial_stress="Gray et al.'s ε in [0, 1] (default 0: off)",

@@ -15,6 +15,8 @@ import numpy as np
 from numba import njit, prange
 
 from workbench.materials.kernels import material_point
+# the observables of a history (period, amplitude): one definition for every method, in the core
+from workbench.oscillation import MIN_CROSSINGS, measure_period, peak, period_amplitude  # noqa: F401
 
 from .kernels import JIT, N_CHUNKS
 
@@ -108,51 +110,6 @@ def total_torque(x: np.ndarray, f: np.ndarray):
     if x.shape[1] == 2:
         return float(np.sum(x[:, 0] * f[:, 1] - x[:, 1] * f[:, 0]))
     return np.cross(x, f).sum(axis=0)
-
-
-# ------------------------------------------------------------------------------------------------
-# Observables of the dynamic drivers (shared by csph, hpm, classic and the stability scenes)
-# ------------------------------------------------------------------------------------------------
-
-MIN_CROSSINGS = 2
-"""Zero crossings a history needs for a period (two crossings: half a period)."""
-
-
-def peak(t: np.ndarray, u: np.ndarray) -> float:
-    """max |u| (m) of a sampled history, each sampled maximum refined by the parabola through it
-    and its two neighbours (for an oscillation sampled n times per period the plain maximum is
-    low by ~(π/n)²/2, the refined one by O((π/n)⁴))."""
-    a = np.abs(np.asarray(u, float))
-    if len(a) == 0 or not np.isfinite(a).any():
-        return math.nan
-    k = int(np.nanargmax(a))
-    if 0 < k < len(a) - 1 and np.all(np.isfinite(a[k - 1:k + 2])):
-        y0, y1, y2 = a[k - 1], a[k], a[k + 1]
-        h0, h1 = t[k] - t[k - 1], t[k + 1] - t[k]
-        if h0 > 0 and h1 > 0:
-            # parabola through the three samples: its vertex value
-            c = ((y2 - y1) / h1 - (y1 - y0) / h0) / (h0 + h1)
-            b = (y1 - y0) / h0 + c * h0
-            if c < 0:
-                return float(y1 - b * b / (4 * c))
-    return float(a[k])
-
-
-def period_amplitude(t: np.ndarray, u: np.ndarray) -> tuple[float, float]:
-    """Period (s) from the zero crossings of u(t) after t = 0 and amplitude (m, :func:`peak`).
-
-    The crossing times are interpolated linearly between samples; the period is twice the
-    least-squares slope of crossing time against crossing index (half a period per crossing).
-    NaN period if there are fewer than ``MIN_CROSSINGS`` crossings."""
-    t = np.asarray(t, float)
-    u = np.asarray(u, float)
-    amp = peak(t, u)
-    t1, y1 = t[1:], u[1:]
-    i = np.flatnonzero(np.sign(y1[:-1]) * np.sign(y1[1:]) < 0)
-    tc = t1[i] - y1[i] * (t1[i + 1] - t1[i]) / (y1[i + 1] - y1[i])
-    if len(tc) < MIN_CROSSINGS:
-        return math.nan, amp
-    return float(2 * np.polyfit(np.arange(len(tc)), tc, 1)[0]), amp
 
 
 # ------------------------------------------------------------------------------------------------

@@ -92,14 +92,19 @@ def newton(body: Body, x: np.ndarray, cons: Constraints, x_target_fixed: np.ndar
     return x, False, max_iter
 
 
-DENSE_BELOW = 3000
-"""Free DOFs under which the Newton system is solved dense (LAPACK): the particle tangent couples
-second neighbours, so a small body's sparse LU fills in and is slower than a dense one."""
+DENSE_BELOW = {2: 400, 3: 1200}
+"""Free DOFs, by dimension, under which the Newton system is solved dense (LAPACK) rather than by
+SuperLU: measured on csph tangents of a clamped beam (min of 3, one BLAS thread, 2 cores; dense
+ms / sparse ms) — 2-D: 320 unknowns 1.4 / 1.7, 480: 8.0 / 6.4, 672: 11.5 / 5.6, 1760: 937 /
+24, 2496: 1433 / 44, 3360: 2390 / 113; 3-D: 216: 0.8 / 2.5, 576: 16 / 40, 1200: 116 / 117, 2160:
+1005 / 330. The particle tangent couples second neighbours, so a tiny body's sparse LU fills in
+and loses; above the crossover the dense solve's n³ loses by far (issue 40: 4.68 s against
+0.35 s at 2 538 unknowns with threaded BLAS on a busy machine)."""
 
 
 def solve_linear(K, rhs, near_null=None, dim: int = 3, kept: KeptHierarchy | None = None,
                  rtol: float = RTOL) -> np.ndarray:
-    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns, above that
+    """K⁻¹ rhs for the Newton step: dense LU below :data:`DENSE_BELOW` unknowns (of ``dim``), above that
     :func:`workbench.linear_systems.solve_symmetric` (SuperLU, or in 3-D above
     :data:`~workbench.linear_systems.AMG_ABOVE` unknowns CG with an AMG hierarchy built on
     ``near_null``, the rigid-body modes of the free DOFs, point-major, or a callable giving
@@ -107,7 +112,7 @@ def solve_linear(K, rhs, near_null=None, dim: int = 3, kept: KeptHierarchy | Non
     ``dim``: the body's dimension)."""
     import scipy.linalg as sla
 
-    if K.shape[0] < DENSE_BELOW:
+    if K.shape[0] < DENSE_BELOW[3 if dim >= 3 else 2]:
         return sla.solve(K.toarray(), rhs, check_finite=False)
     return solve_symmetric(K.tocsr(), rhs, near_null=near_null, dim=dim, kept=kept, rtol=rtol)
 

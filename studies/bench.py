@@ -509,7 +509,7 @@ def main(args) -> int:
                                                      "(where the solver reports it)"}),
          "n_particles_actual": (dims2, n_actual, {"units": "-"}),
          "resolution": (dims2, resolution, {"units": "-", "long_name":
-                                            "particles across the scene's length scale"}),
+                                            "intervals across the scene's length scale (spacing length/r)"}),
          "startup_time": (("solver",), startup, {"units": "s"}),
          "cold_startup_time": (("solver",), cold, {"units": "s", "long_name":
                                                    "first launch (cache filled or reused)"}),

@@ -266,8 +266,8 @@ def check_resolutions(resolutions) -> list[int]:
     line); an empty list is refused."""
     from workbench.scenes import ParameterError
 
-    allowed = ("allowed: integers >= 1 (particles or elements across the body; a spacing larger "
-               "than the body is not a discretisation)")
+    allowed = ("allowed: integers >= 1 (intervals across the scene's length: spacing length/r; a "
+               "spacing larger than the body is not a discretisation)")
     if isinstance(resolutions, (str, bytes)) or not hasattr(resolutions, "__iter__"):
         resolutions = [resolutions]
     out = []

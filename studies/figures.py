@@ -107,7 +107,7 @@ def cantilever(ds, outdir) -> Path:
                              label=f"{s}, P L²/EI = {p:.3g}", alpha=0.4 + 0.6 * k / max(1, len(loads) - 1))
     ax[0].set(xscale="log", yscale="log", xlabel="load P L² / (E I) [-]", ylabel="tip deflection / L [-]",
               title=f"cantilever, plane {ds.attrs.get('plane', 'strain')}")
-    ax[1].set(xlabel="elements or particles across H [-]",
+    ax[1].set(xlabel="intervals across H, H/Δx or H/h [-]",
               ylabel="|δ − δ_FEM,converged| / δ_FEM,converged [-]", title="convergence")
     for a in ax:
         a.grid(alpha=0.3, which="both")
@@ -140,7 +140,7 @@ def plate(ds, outdir) -> Path:
         good = np.isfinite(v)
         if good.any():
             ax[1].plot(res[good], v[good], **{**STYLE.get(str(s), {}), "ls": "-"}, label=str(s))
-    ax[1].set(xscale="log", xlabel="particles or elements across H [-]", ylabel="period [s]",
+    ax[1].set(xscale="log", xlabel="intervals across H, H/Δx or H/h [-]", ylabel="period [s]",
               title="period against resolution")
     for a in ax:
         a.grid(alpha=0.3, which="both")

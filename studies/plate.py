@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from workbench import analytic, results
+from workbench.oscillation import with_period_notes
 from workbench.scenes import Plate
 
 from .common import Gate, field_options, field_series, observed_order, planned, validate
@@ -23,7 +24,7 @@ from .sweep import Task, run_tasks
 NAME = "plate"
 SCENE = Plate
 SOLVERS = ("analytic", "fem", "csph", "csph_quad", "csph_bl", "hpm", "hpm_vc", "sph")
-# Particles / quadratic elements across H. The FEM's modal period is cheap on every rung; its one
+# Intervals across H (spacing H/r; r quadratic elements). The FEM's modal period is cheap on every rung; its one
 # dynamic run (period and amplitude from the tip history) is at FEM_DYNAMIC.
 RESOLUTIONS = {"fem": (2, 4, 8, 16), "csph": (5, 10, 20, 40), "csph_quad": (5, 10, 20),
                "csph_bl": (5, 10, 20), "hpm": (5, 10, 20), "hpm_vc": (5, 10, 20), "sph": (5, 10)}
@@ -137,7 +138,9 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
         for r in ladders[s]:
             j = all_res.index(r)
             out = outs[(s, r)]
-            status[i, j] = out["status"] if isinstance(out["status"], str) else str(out["status"])
+            # a period that could not be measured says why (issue 38.4: no oscillation)
+            status[i, j] = (with_period_notes(out["status"], out, ["period"])
+                            if isinstance(out["status"], str) else str(out["status"]))
             period[i, j] = out.get("period", np.nan)
             amplitude[i, j] = out.get("amplitude", np.nan)
             # the FEM's period is the modal one: its cost is the modal solve's
@@ -164,7 +167,7 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
             "status": (("solver", "resolution"), status.astype(str), {"units": "-"}),
         },
         coords={"solver": solvers, "resolution": ("resolution", np.array(all_res),
-                                                  {"units": "-", "long_name": "particles or elements across H"}),
+                                                  {"units": "-", "long_name": "intervals across H (spacing H/r): r + 1 particles (node lattice), r (cell), r elements"}),
                 "time": ("time", time, {"units": "s"})},
     )
     ds["period_nondim"] = (ds.period * scene.c0 / scene.L).assign_attrs(units="-", long_name="T c0 / L")

@@ -5,7 +5,10 @@ A scene written with the scene API (:mod:`workbench.scenes.model`; README "Your 
 study module of its own: this one runs it with every requested method, stores each observable of
 the model against the load parameter (static drive), the time (explicit drive, on a common grid of
 the drive's ``n_out`` + 1 points) or the mode number (modal drive), with the energies of explicit
-runs, and plots them. A headline scene (with references and gates) gets a study module of its own.
+runs — kinetic, stored, the external work, the energies dissipated where a method reports them
+(plastic work, released by failure) and ``energy_balance``, their balance kinetic + stored +
+dissipated − external work, so that conservation can be checked from the dataset — and plots
+them. A headline scene (with references and gates) gets a study module of its own.
 """
 from __future__ import annotations
 
@@ -13,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from workbench import results
+from workbench.oscillation import with_period_notes
 from workbench.scenes import model as M
 
 from .common import check_resolutions
@@ -25,12 +29,26 @@ QUICK_RESOLUTIONS = (5, 10)
 ERROR_LABEL = "no reference"
 
 
+ENERGIES = {"kinetic_energy": "kinetic_energy", "stored_energy": "strain_energy",
+            "external_work": "external_work", "plastic_work": "plastic_work",
+            "released_energy": "released_energy", "energy_balance": "energy_history"}
+"""The energy histories of an explicit run in the dataset -> their key in a solver's result."""
+DISSIPATED = ("plastic_work", "released_energy")
+"""Stored only where some method reports them."""
+ENERGY_NAMES = {"kinetic_energy": "kinetic energy", "stored_energy": "stored (strain) energy",
+                "external_work": "work of the loads and of the prescribed motion",
+                "plastic_work": "plastic work", "released_energy": "energy released by failure",
+                "energy_balance": "kinetic + stored + dissipated - external work (0: conserved)"}
+
+
 def solvers_for(model: M.Model) -> tuple:
     """The methods that can run ``model``: the gradient-form particle methods (static, modal and
-    explicit drives), classic SPH for explicit drives, the FEM where it reads scene models."""
+    explicit drives), classic SPH for explicit and static drives (a static one by dynamic
+    relaxation through its own explicit step, as ``sph.driver.solve`` runs it; it has no
+    tangent for a modal one), the FEM where it reads scene models."""
     from sph import METHODS
 
-    out = [m for m in METHODS if m != "sph" or isinstance(model.drive, M.Explicit)]
+    out = [m for m in METHODS if m != "sph" or not isinstance(model.drive, M.Modal)]
     try:
         import fem_reference
 
@@ -42,9 +60,11 @@ def solvers_for(model: M.Model) -> tuple:
 
 
 def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: str | None = None,
-        fields=None, field_runs=None) -> xr.Dataset:
+        fields=None, field_runs=None, options=None) -> xr.Dataset:
     """Run ``scene`` with ``solvers`` (default: :func:`solvers_for`) at ``resolutions`` (a list,
-    or a dict solver -> list; default :data:`RESOLUTIONS`, or :data:`QUICK_RESOLUTIONS`)."""
+    or a dict solver -> list; default :data:`RESOLUTIONS`, or :data:`QUICK_RESOLUTIONS`);
+    ``options``: solver -> {name: value}, the method's options (``sph.driver.solve``'s, the
+    FEM's ``solve_model``'s)."""
     model = scene.model()
     allowed = solvers_for(model)
     solvers = list(solvers or allowed)
@@ -55,8 +75,10 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     default = QUICK_RESOLUTIONS if quick else RESOLUTIONS
     ladders = {s: check_resolutions(resolutions.get(s, default) if isinstance(resolutions, dict)
                                     else (resolutions or default)) for s in solvers}
-    tasks = [Task.make(s, scene, r, **({"fields": str(fields)} if fields is not None and
-                                       (field_runs is None or (s, r) in field_runs) else {}))
+    options = options or {}
+    tasks = [Task.make(s, scene, r, **options.get(s, {}),
+                       **({"fields": str(fields)} if fields is not None and
+                          (field_runs is None or (s, r) in field_runs) else {}))
              for s, lad in ladders.items() for r in lad]
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, scene.name)))
     all_res = sorted({r for lad in ladders.values() for r in lad})
@@ -76,24 +98,26 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     n_ax = len(axis[1])
     series = {o.name: np.full(shp + (n_ax,), np.nan) for o in obs}
     if isinstance(drive, M.Explicit):
-        series.update(kinetic_energy=np.full(shp + (n_ax,), np.nan),
-                      stored_energy=np.full(shp + (n_ax,), np.nan))
+        series.update({k: np.full(shp + (n_ax,), np.nan) for k in ENERGIES})
     if isinstance(drive, M.Modal):
         series["period"] = np.full(shp + (n_ax,), np.nan)
     scalars = {}
+    notes = {}
+    notes_of = [o.name for o in model.observables if isinstance(o, M.Period)]
     for p in (o for o in model.observables if isinstance(o, M.Period)):
         scalars[p.name] = np.full(shp, np.nan)
         scalars[f"{p.name}_amplitude"] = np.full(shp, np.nan)
+        notes[f"{p.name}_status"] = np.full(shp, "not run", dtype=object)
     for i, s in enumerate(solvers):
         for r in ladders[s]:
             j = all_res.index(r)
             out = outs[(s, r)]
             st = out.get("status", "error: no status")
-            status[i, j] = st if isinstance(st, str) else _summary(st)
+            status[i, j] = with_period_notes(st, out, list(notes_of)) if isinstance(st, str) else _summary(st)
             wall[i, j] = float(np.nanmax(np.atleast_1d(out.get("wall_time", np.nan))))
             npart[i, j] = int(out.get("n_particles", out.get("n_dof", 0)))
             for name, arr in series.items():
-                src = {"stored_energy": "strain_energy", "period": "periods"}.get(name, name)
+                src = {"period": "periods", **ENERGIES}.get(name, name)
                 if src not in out:
                     continue
                 y = np.asarray(out[src], float)
@@ -103,6 +127,8 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
                     arr[i, j] = y
             for name, arr in scalars.items():
                 arr[i, j] = float(out.get(name, np.nan))
+            for name, arr in notes.items():
+                arr[i, j] = str(out.get(name, "not measured"))
     dims = ("solver", "resolution")
     data = {"status": (dims, status.astype(str), {"units": "-"}),
             "wall_time": (dims, wall, {"units": "s"}),
@@ -112,11 +138,15 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     for o in obs:
         data[o.name] = (dims + (axis[0],), series[o.name],
                         {"units": units.get(type(o), "-"), "long_name": repr(o)})
-    for name in ("kinetic_energy", "stored_energy", "period"):
-        if name in series:
-            data[name] = (dims + (axis[0],), series[name], {"units": "s" if name == "period" else "J"})
+    for name in (*ENERGIES, "period"):
+        if name in series and (name not in DISSIPATED or np.isfinite(series[name]).any()):
+            data[name] = (dims + (axis[0],), series[name],
+                          {"units": "s" if name == "period" else "J" if model.dim == 3 else "J/m",
+                           "long_name": ENERGY_NAMES.get(name, name)})
     for name, arr in scalars.items():
         data[name] = (dims, arr, {"units": "m" if name.endswith("amplitude") else "s"})
+    for name, arr in notes.items():
+        data[name] = (dims, arr.astype(str), {"units": "-", "long_name": "'ok', or why there is no period"})
     ds = xr.Dataset(data, coords={"solver": solvers, "resolution": all_res,
                                   axis[0]: (axis[0], axis[1], axis[2])})
     ds.attrs.update(results.provenance(scene.name, scene))

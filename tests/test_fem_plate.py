@@ -68,7 +68,9 @@ def test_period_from_history_of_a_sine():
 
 @pytest.fixture(scope="module")
 def dynamic_run():
-    r = solve(dataclasses.replace(SCENE, periods=1.5), 2, dynamic=True, steps_per_period=100)
+    # 1.75 periods: a period is measured from three crossings of the history's mean (one whole
+    # cycle, workbench.oscillation), the last of them at 1.5 periods
+    r = solve(dataclasses.replace(SCENE, periods=1.75), 2, dynamic=True, steps_per_period=100)
     assert r["status"] == "ok", r["status"]
     return r
 

@@ -163,7 +163,7 @@ DEFAULT_FRAMES = 20
 
 
 def series_name(scene_name: str, method: str, resolution: int) -> str:
-    """The name of a run's field series, e.g. ``plate_csph_H10`` (resolution: particles across H)."""
+    """The name of a run's field series, e.g. ``plate_csph_H10`` (resolution: r intervals across the scene's length, spacing H/r)."""
     return f"{scene_name}_{method}_H{int(resolution)}"
 
 

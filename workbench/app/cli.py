@@ -36,6 +36,95 @@ def _parse_sets(items) -> dict[str, str]:
     return out
 
 
+FEM_CHECKS = {
+    "steps_per_period": (lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 2,
+                         "an integer >= 2 (Newmark steps per lowest modal period)"),
+    "maxit": (lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1, "an integer >= 1"),
+    "field_frames": (lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1, "an integer >= 1"),
+    "rtol": (lambda v: isinstance(v, (int, float)) and 0 < v < 1, "(0, 1)"),
+    "max_increment": (lambda v: isinstance(v, (int, float)) and v > 0, "(0, inf]"),
+    "min_increment": (lambda v: isinstance(v, (int, float)) and v > 0, "(0, inf)"),
+    "initial_tangent": (lambda v: isinstance(v, bool), "true or false"),
+    "fbar": (lambda v: v is None or isinstance(v, bool), "true, false or none"),
+    "deletion": (lambda v: isinstance(v, bool), "true or false"),
+    "element": (lambda v: v in ("q9", "q4", "hex27", "hex8"), "q9, q4, hex27, hex8"),
+}
+"""The FEM's options settable from the command line (``--option fem.KEY=VALUE``), with their
+allowed values (``fem_reference.model.solve_model``)."""
+
+
+def _option_value(text: str):
+    """A command-line value: a Python literal (number, True/False/None, string), else the text."""
+    import ast
+
+    low = {"true": True, "false": False, "none": None}.get(text.strip().lower(), ...)
+    if low is not ...:
+        return low
+    try:
+        return ast.literal_eval(text.strip())
+    except (ValueError, SyntaxError):
+        return text.strip()
+
+
+def parse_options(items, allowed, solvers, scene, resolution: int = 5) -> dict:
+    """``--option METHOD.KEY=VALUE`` items as {method: {key: value}}, each checked before any
+    run: the method one of ``allowed`` (and of the ``solvers`` asked for, when given), the key
+    one of its options, the value accepted — by the FEM's table :data:`FEM_CHECKS`, and for a
+    particle method by building its body on the scene at ``resolution`` (the method's own checks).
+    UsageError (one line) otherwise."""
+    out: dict = {}
+    for item in items or []:
+        head, eq, text = item.partition("=")
+        method, dot, key = head.strip().partition(".")
+        if not (eq and dot and method and key):
+            raise UsageError(f"--option: {item!r} is not METHOD.KEY=VALUE (e.g. sph.stress=hyperelastic)")
+        if method not in allowed:
+            raise UsageError(f"--option: method {method!r} cannot run this scene; allowed: "
+                             f"{', '.join(allowed)}")
+        if solvers and method not in solvers:
+            raise UsageError(f"--option: method {method!r} is not among the --solver runs "
+                             f"({', '.join(solvers)})")
+        value = _option_value(text)
+        if method == "fem":
+            if key not in FEM_CHECKS:
+                raise UsageError(f"--option: {key!r} is not an option of fem; allowed: "
+                                 f"{', '.join(FEM_CHECKS)}")
+            ok, rng = FEM_CHECKS[key]
+            if not ok(value):
+                raise UsageError(f"--option: fem.{key} = {text!r} is out of range; allowed: {rng}")
+        else:
+            from sph.driver import method_entry
+
+            mod, _ = method_entry(method)
+            if key not in mod.OPTIONS:
+                raise UsageError(f"--option: {key!r} is not an option of {method}; allowed: "
+                                 f"{', '.join(mod.OPTIONS)}")
+        out.setdefault(method, {})[key] = value
+    for method, opts in out.items():
+        if method != "fem":
+            _try_build(method, opts, scene, resolution)
+    return out
+
+
+def _try_build(method: str, options: dict, scene, resolution: int) -> None:
+    """Build ``method``'s body with ``options`` on ``scene`` at ``resolution``: the method's own
+    checks of its options, as one line (a scene that cannot be discretised is left to the run,
+    which reports it)."""
+    from sph.driver import method_entry, model_at
+    from sph.particles import discretise
+
+    mod, defaults = method_entry(method)
+    try:
+        ps = discretise(model_at(scene, resolution)[0], resolution)
+    except Exception:  # the run says what is wrong with the scene
+        return
+    try:
+        mod.build(ps, **{**defaults, **options})
+    except (ValueError, TypeError) as err:
+        shown = ", ".join(f"{method}.{k}={v!r}" for k, v in options.items())
+        raise UsageError(f"--option {shown}: {_one_line(err)}") from None
+
+
 def _print_parameters(scene_cls) -> None:
     for p in scene_cls.parameters():
         default = p["default"]
@@ -54,12 +143,17 @@ def cmd_list(args) -> int:
         print(f"{cls.__name__} ({args.file}): solvers {', '.join(_scene_solvers(scene))}")
         print(f"  {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
         _print_parameters(cls)
+        length = cls().model().length
+        print(f"  resolution r: r intervals across the model's length {length:g} m (spacing "
+              f"{length:g}/r m; r + 1 particles across it on the node lattice, r elements)")
         return 0
     for name in studies.STUDIES:
         study = studies.get(name)
         print(f"{name}: solvers {', '.join(study.SOLVERS)}")
         print(f"  {(study.__doc__ or '').strip().splitlines()[0]}")
         _print_parameters(study.SCENE)
+    print("Resolution r: r intervals across the scene's reference length (H for the headline "
+          "scenes): spacing H/r, r + 1 particles across H on the node lattice, r elements.")
     print("A scene of your own: workbench run my_scene.py[:SceneClass] (README: 'Your own scene').")
     return 0
 
@@ -181,9 +275,14 @@ def _validated(args):
             raise UsageError(f"--solver: {s!r} is not supported by {args.study}; allowed: "
                              f"{', '.join(allowed)}")
     resolutions = list(args.resolution) if args.resolution else None
+    if args.option and not is_scene_file(args.study):
+        raise UsageError(f"--option: {args.study} sets its methods' options itself; --option is "
+                         "for a scene file (my_scene.py)")
     validate(study, scene, args.solver, resolutions, args.quick)  # incl. the memory of every run
+    options = parse_options(args.option, allowed, args.solver, scene,
+                            min(resolutions) if resolutions else 5)
     _check_common(args)
-    return study, scene, resolutions
+    return study, scene, resolutions, options
 
 
 def cmd_run(args) -> int:
@@ -191,12 +290,13 @@ def cmd_run(args) -> int:
 
     from .verify import run_study
 
-    study, scene, resolutions = _validated(args)
+    study, scene, resolutions, options = _validated(args)
     name = scene.name if is_scene_file(args.study) else args.study
     with recording() as runs:
         section = run_study(name, args.out, args.quick, solvers=args.solver,
                             resolutions=resolutions, scene=scene, scheduler=args.scheduler,
-                            budget=args.budget, fields=args.fields, study=study)
+                            budget=args.budget, fields=args.fields, study=study,
+                            options=options)
     ds = section["dataset"]
     print(f"{name}: {section.get('written', Path(args.out) / (name + '.nc'))}")
     if args.fields:
@@ -252,7 +352,7 @@ def _print_observables(ds, info=None) -> None:
     axis = next((d for d in ("parameter", "time", "mode") if d in ds.dims), None)
     names = [v for v in ds.data_vars if axis is not None and axis in ds[v].dims]
     names += [v for v in ds.data_vars if ds[v].dims == ("solver", "resolution")
-              and v not in ("status", "wall_time", "n_particles")]
+              and v not in ("status", "wall_time", "n_particles") and ds[v].dtype.kind in "fiu"]
     for s in ds.solver.values:
         for r in ds.resolution.values:
             st = str(ds.status.sel(solver=s, resolution=r).values)
@@ -291,15 +391,25 @@ def cmd_bench(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="workbench", description=__doc__.splitlines()[0])
     p.add_argument("-v", "--verbose", action="store_true", help="log every run")
+    # -v after the subcommand as well (SUPPRESS: absent there, the main parser's value stands)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
+                        help="log every run")
     sub = p.add_subparsers(dest="command", required=True)
-    lp = sub.add_parser("list", help="studies, their solvers and parameters")
+    lp = sub.add_parser("list", help="studies, their solvers and parameters", parents=[common])
     lp.add_argument("file", nargs="?", help="a scene file (my_scene.py[:SceneClass]): its parameters")
     lp.set_defaults(fn=cmd_list)
-    r = sub.add_parser("run", help="run one study, or a scene file (my_scene.py[:SceneClass])")
+    r = sub.add_parser("run", help="run one study, or a scene file (my_scene.py[:SceneClass])",
+                       parents=[common])
     r.add_argument("study")
     r.add_argument("--solver", action="append", help="a method (repeatable)")
-    r.add_argument("--resolution", action="append", type=int, help="particles/elements across (repeatable)")
+    r.add_argument("--resolution", action="append", type=int,
+                   help="r intervals across the scene's reference length: spacing length/r, r + 1 "
+                        "particles, r elements across it (repeatable)")
     r.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a scene parameter")
+    r.add_argument("--option", action="append", metavar="METHOD.KEY=VALUE",
+                   help="a method's option for a scene file, e.g. sph.stress=hyperelastic or "
+                        "fem.steps_per_period=400 (repeatable)")
     r.add_argument("--out", default="results")
     r.add_argument("--quick", action="store_true")
     r.add_argument("--scheduler", help="'serial' (default), 'local' (dask cluster of this machine's "
@@ -310,7 +420,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write the particle runs' fields (displacement, velocity, stress, ε_p, "
                         "damage) as ParaView series (.pvd + .vtp) under OUT/fields/")
     r.set_defaults(fn=cmd_run)
-    v = sub.add_parser("verify", help="run the headline studies, apply the gates, write the report")
+    v = sub.add_parser("verify", help="run the headline studies, apply the gates, write the report",
+                       parents=[common])
     v.add_argument("--quick", action="store_true")
     v.add_argument("--out", default="results")
     v.add_argument("--scheduler", help="'local' (default; 'serial' with --quick) or a dask "
@@ -318,7 +429,8 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--budget", type=float, default=0.0,
                    help="seconds for extending unsettled convergence ladders (default 0: off)")
     v.set_defaults(fn=cmd_verify)
-    b = sub.add_parser("bench", help="particle-steps per second of a scene's time loop")
+    b = sub.add_parser("bench", help="particle-steps per second of a scene's time loop",
+                       parents=[common])
     b.add_argument("--scene", help="plate (default), microcantilever3d or rc_beam")
     b.add_argument("--solver", action="append")
     b.add_argument("--particles", action="append", type=int)

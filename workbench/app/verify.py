@@ -24,7 +24,7 @@ beam's csph impacts at 12.5 mm (the quick one: specimen B)."""
 
 def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, scene=None,
               scheduler: str | None = None, budget: float = 0.0, fields=False,
-              field_runs=None, study=None) -> dict:
+              field_runs=None, study=None, options=None) -> dict:
     """Run one study and write ``STUDY.nc`` and its figures; returns the report section.
     ``study``: the study module (default ``studies.get(name)``; a user's scene runs with the
     generic :mod:`studies.scene` and its own ``name``).
@@ -37,6 +37,9 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
     resolution) pairs; None: all) write their fields as ParaView series under ``OUT/fields/`` (or
     the folder); the section gets an off-screen snapshot where this machine can render, else a note
     saying where the fields are and why there is no picture (:func:`field_section`).
+
+    ``options`` (solver -> {name: value}): the methods' options, for a study whose ``run`` takes
+    them (a user's scene, :mod:`studies.scene`).
     """
     import inspect
 
@@ -56,9 +59,10 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
             field_kw = dict(fields=field_dir, field_runs=field_runs)
         else:
             field_notes.append(f"Fields: the {name} study writes no field output.")
+    opt_kw = {"options": options} if options else {}
     t0 = time.perf_counter()
     ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick,
-                   scheduler=scheduler, **field_kw)
+                   scheduler=scheduler, **field_kw, **opt_kw)
     written = ds.attrs.get("field_series")
     extended = []
     while budget > 0:
@@ -81,7 +85,7 @@ def run_study(name: str, outdir, quick: bool, solvers=None, resolutions=None, sc
         extended += [f"{s} to {max(v)}" for s, v in grow.items()]
         log.info("%s: order not settled, ladder extended: %s", name, ", ".join(extended[-len(grow):]))
         ds = study.run(scene=scene, solvers=solvers, resolutions=resolutions, quick=quick,
-                       scheduler=scheduler)
+                       scheduler=scheduler, **opt_kw)
     if written is not None:
         ds.attrs["field_series"] = written  # the extended ladders ran without field output
     # the dataset first (a failed write saves it in a fallback folder and says where:

@@ -4,7 +4,8 @@
 A model holds
 
 - the geometry and a resolution rule: ``dim``, ``length`` (the spacing of a run at resolution r is
-  ``length / r``: particles or elements across that length), the lattice of the particle methods;
+  ``length / r``: r intervals across that length — r + 1 particles on the node lattice, r on the
+  cell lattice, r elements), the lattice of the particle methods;
 - **regions** (:class:`Region`): a shape (:mod:`workbench.scenes.shapes`) with its own material; a
   region may be *held* (a rigid clamp block: its particles are fixed, the FEM does not mesh it and
   clamps its interface), belong to a separate *body* (bodies meet only through :class:`Contact`),
@@ -267,7 +268,9 @@ class Explicit:
     failed material point; the energy balance's gain growing exponentially beyond an absolute
     floor and beyond ``energy_growth`` of the largest energy seen (:mod:`sph.monitor`; one-sided:
     dissipation is recorded, not flagged); with ``disorder`` (η₉₅ limit),
-    particle disorder measured on the set ``disorder_set`` (all particles when None).
+    particle disorder measured on the set ``disorder_set`` (all particles when None) — None: the
+    method's own default (classic SPH monitors its known failure, disorder, at
+    :data:`sph.classic.DISORDER` on elastic materials; the other methods none), ``math.inf``: off.
     ``dt_reference``: what ``dt_factor`` multiplies — 'cfl' (the default: the CFL estimate
     Δx/c_p) or 'spectrum' (the method's critical step 2/ω_max at the initial state,
     :mod:`sph.spectrum`). ``separate`` (two set names) with ``after`` (s): the run stops ``after``
@@ -562,6 +565,8 @@ class Model:
                 raise SceneError(f"dt_factor: {d.dt_factor!r} is out of range; allowed: (0, 10]")
             if d.dt_reference not in ("cfl", "spectrum"):
                 raise SceneError(f"dt_reference: {d.dt_reference!r} is not allowed; 'cfl' or 'spectrum'")
+            if d.disorder is not None and not d.disorder > 0:
+                raise SceneError(f"disorder: {d.disorder!r} is out of range; allowed: (0, inf] or None")
             if d.disorder_set is not None and d.disorder_set not in set_names:
                 raise SceneError(f"drive: disorder set '{d.disorder_set}' does not exist")
         if isinstance(d, Modal) and not (isinstance(d.n_modes, int) and d.n_modes >= 1):
