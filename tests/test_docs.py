@@ -26,7 +26,8 @@ def test_readme_starts_with_the_two_commands():
 def test_readme_is_a_guide_that_links_every_docs_page():
     text = README.read_text()
     # a guide of about 200 lines; the measurement record lives in docs/
-    assert len(text.splitlines()) <= 240
+    # about 200 lines of guide, plus the two scene files of "Your own scene" that tests run as written
+    assert len(text.splitlines()) <= 320
     linked = set(re.findall(r"\]\((docs/[^)#]+)", text))
     pages = {f"docs/{p.name}" for p in (ROOT / "docs").glob("*.md")}
     assert pages, "docs/ holds the method notes and the measurement record"
