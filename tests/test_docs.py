@@ -51,3 +51,11 @@ def test_api_reference_is_built_from_the_docstrings(tmp_path):
         words = re.findall(r"[A-Za-z]{4,}", first_line)[:3]
         for w in words:  # the docstring's own words are on the page
             assert w in html, (name, w)
+
+
+def test_workbench_docs_writes_the_reference(tmp_path, capsys):
+    from workbench.app import cli
+
+    assert cli.main(["docs", "--out", str(tmp_path / "api")]) == 0
+    assert (tmp_path / "api" / "workbench" / "scenes" / "model.html").exists()
+    assert "index.html" in capsys.readouterr().out

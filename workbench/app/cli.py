@@ -388,6 +388,17 @@ def cmd_bench(args) -> int:
         raise UsageError(str(err)) from None
 
 
+def cmd_docs(args) -> int:
+    from . import apidoc
+
+    try:
+        results.check_writable(args.out)
+    except results.OutputError as err:
+        raise UsageError(f"--out: {err}") from None
+    print(f"API reference of the scene vocabulary: {apidoc.build(args.out)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="workbench", description=__doc__.splitlines()[0])
     p.add_argument("-v", "--verbose", action="store_true", help="log every run")
@@ -437,6 +448,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--threads", action="append", type=int)
     b.add_argument("--out", default="results")
     b.set_defaults(fn=cmd_bench)
+    d = sub.add_parser("docs", help="the API reference of the scene vocabulary (HTML, from the docstrings)",
+                       parents=[common])
+    d.add_argument("--out", default="docs/api")
+    d.set_defaults(fn=cmd_docs)
     return p
 
 
