@@ -33,7 +33,7 @@ def _start_verify(config) -> dict:
     out = tempfile.mkdtemp(prefix="workbench-verify-")
     env = dict(os.environ, WORKBENCH_CACHE=os.path.join(out, "cache"))
     logs = [open(os.path.join(out, name), "w+") for name in ("stdout.txt", "stderr.txt")]
-    proc = subprocess.Popen([sys.executable, "-m", "workbench.app.cli", "verify", "--quick",
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "verify", "--quick",
                              "--out", out], stdout=logs[0], stderr=logs[1], text=True, env=env)
     config.stash[VERIFY] = job = dict(out=out, proc=proc, logs=logs)
     return job

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from workbench import results
-from workbench.app import cli
+from app import cli
 
 
 @pytest.fixture(scope="module")

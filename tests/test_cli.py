@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from workbench.app import cli
+from app import cli
 from workbench.scenes import Cantilever, ParameterError, SSCurve, with_overrides
 
 
@@ -37,7 +37,7 @@ def test_overrides_are_typed_and_validated():
 
 
 def test_console_script_runs_analytic_study(tmp_path):
-    out = subprocess.run([sys.executable, "-m", "workbench.app.cli", "run", "ss_curve", "--solver",
+    out = subprocess.run([sys.executable, "-m", "app.cli", "run", "ss_curve", "--solver",
                           "analytic", "--out", str(tmp_path)], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "ss_curve.nc").exists() and (tmp_path / "ss_curve.png").exists()

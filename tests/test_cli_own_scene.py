@@ -7,7 +7,7 @@ import pytest
 
 from test_readme_example import beam_theory, example_source
 from workbench import results
-from workbench.app import cli
+from app import cli
 
 
 @pytest.fixture

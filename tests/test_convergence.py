@@ -23,7 +23,7 @@ def test_pre_asymptotic_ladder_is_extended_within_budget():
 
 
 def test_cost_to_accuracy_picks_the_cheapest_run_within_the_target():
-    from workbench.app.report import cost_to_accuracy
+    from app.report import cost_to_accuracy
 
     rows = [dict(solver="a", resolution=5, error=0.02, wall_time=1.0),
             dict(solver="a", resolution=10, error=0.002, wall_time=8.0),

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pdoc  # noqa: F401  (the test extra: a missing pdoc is an install error, not a skip)
 
-from workbench.app import apidoc
+from app import apidoc
 from workbench.scenes import model
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -54,7 +54,7 @@ def test_api_reference_is_built_from_the_docstrings(tmp_path):
 
 
 def test_workbench_docs_writes_the_reference(tmp_path, capsys):
-    from workbench.app import cli
+    from app import cli
 
     assert cli.main(["docs", "--out", str(tmp_path / "api")]) == 0
     assert (tmp_path / "api" / "workbench" / "scenes" / "model.html").exists()

@@ -200,7 +200,7 @@ def test_readme_gravity_cantilever_with_the_fem(tmp_path, monkeypatch):
     from test_readme_example import beam_theory, example_source
 
     from workbench import results
-    from workbench.app import cli
+    from app import cli
 
     monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
     scene_file = tmp_path / "gravity_cantilever.py"

@@ -92,7 +92,7 @@ def test_cli_run_fields_and_report_note(tmp_path, monkeypatch, capsys):
 
     from studies import plate
     from workbench import fields
-    from workbench.app import cli, verify
+    from app import cli, verify
 
     monkeypatch.setenv("WORKBENCH_NO_CACHE", "1")
     out = tmp_path / "out"

@@ -1,22 +1,21 @@
 """The layers import one way — the shared core (``workbench``: scenes, materials, analytic, results,
 fields) ← the solvers (``sph``, ``fem_reference``) ← the studies (``studies``) ← the application
-(``workbench.app``: CLI, verify, report) — and no module imports another in a circle. Checked on
+(``app``: CLI, verify, report) — and no module imports another in a circle. Checked on
 the source (every ``import`` and ``from … import``, also inside functions), so a lazy import that
 breaks the rule fails too."""
 import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("workbench", "sph", "fem_reference", "studies")
+PACKAGES = ("workbench", "sph", "fem_reference", "studies", "app")
 RANK = {"core": 0, "solvers": 1, "studies": 2, "app": 3}
 
 
 def layer(module: str) -> str:
-    if module.startswith("workbench.app"):
-        return "app"
+    """The layer of a module is its top-level package: the folders show the layers."""
     top = module.split(".")[0]
     return {"workbench": "core", "sph": "solvers", "fem_reference": "solvers",
-            "studies": "studies"}[top]
+            "studies": "studies", "app": "app"}[top]
 
 
 def modules() -> dict[str, Path]:

@@ -47,7 +47,7 @@ def test_a_run_is_validated_on_its_own_ladder():
 
 
 def test_cli_bad_input_exit_status(tmp_path, capsys):
-    from workbench.app.cli import main
+    from app.cli import main
 
     assert main(["run", "microcantilever", "--quick", "--out", str(tmp_path),
                  "--set", "gb_thickness=2e-7"]) == 2
@@ -794,7 +794,7 @@ def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_p
     figure, its accuracy-against-cost rows (csph and the FEM per case) and its report notes."""
     from studies import microcantilever_root as study
     from workbench import results
-    from workbench.app import cli
+    from app import cli
 
     argv = ["run", "microcantilever_root", "--set", "dim=2", "--resolution", "5", "--resolution",
             "10", "--out", str(tmp_path)]

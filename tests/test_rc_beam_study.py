@@ -12,7 +12,7 @@ from workbench.scenes import ParameterError, RCBeam
     ("velocity=0", "velocity"), ("velocity=-2", "velocity"), ("f_t=0", "f_t"), ("f_c=-1", "f_c"),
     ("f_y=0", "f_y"), ("eps_release=1e-4", "eps_release"), ("spacing=0.025", "spacing")])
 def test_cli_bad_input_exit_status(setting, name, tmp_path, capsys):
-    from workbench.app.cli import main
+    from app.cli import main
 
     assert main(["run", "rc_beam", "--quick", "--out", str(tmp_path), "--set", setting]) == 2
     err = capsys.readouterr().err.strip()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from workbench import results
-from workbench.app import cli
+from app import cli
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 

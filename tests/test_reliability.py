@@ -15,13 +15,13 @@ import pytest
 
 from studies import common, sweep
 from workbench import progress, results
-from workbench.app import cli
+from app import cli
 from workbench.scenes import Plate
 
 
 def _refused(argv, capsys, monkeypatch, needle):
     """cli.main(argv) exits 2 with one line containing ``needle``, no study started."""
-    import workbench.app.verify as verify
+    import app.verify as verify
 
     def no_work(*a, **k):
         raise AssertionError("work started before the input was checked")
@@ -217,8 +217,8 @@ import sys, time
 sys.path.insert(0, {root!r})
 import numba
 from studies import common, sweep
-import workbench.app.verify as verify
-from workbench.app import cli
+import app.verify as verify
+from app import cli
 from workbench.scenes import Plate
 
 
@@ -275,7 +275,7 @@ def test_ctrl_c_during_a_compiled_loop_exits_130(tmp_path):
 
 
 def test_ctrl_c_in_the_cli_says_how_to_resume(tmp_path, capsys, monkeypatch):
-    import workbench.app.verify as verify
+    import app.verify as verify
 
     monkeypatch.setenv("WORKBENCH_CACHE", str(tmp_path / "cache"))
 
@@ -601,7 +601,7 @@ def _stability_section(status, gate_passed=True):
 ])
 def test_stability_exit_status_follows_its_gates(status, gate_passed, code, tmp_path, capsys,
                                                 monkeypatch):
-    import workbench.app.verify as verify
+    import app.verify as verify
 
     section, stability = _stability_section(status, gate_passed)
     monkeypatch.setattr(verify, "run_study", lambda *a, **k: section)
@@ -625,7 +625,7 @@ def test_full_disk_for_the_report_names_the_datasets(kind, tmp_path, capsys, mon
     line naming where the datasets are, exit 1, no traceback."""
     import errno
 
-    import workbench.app.verify as verify
+    import app.verify as verify
 
     def section(name, outdir, *a, **k):
         return dict(name=name, gates=[], rows=[], figures=[], error_label="-", verdict="PASS",

@@ -18,7 +18,7 @@ import pytest
 
 from studies import common, sweep
 from workbench import runcache
-from workbench.app import cli
+from app import cli
 from workbench.scenes import Plate
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -138,7 +138,7 @@ def test_the_key_covers_the_solver_and_the_core_not_the_studies(tmp_path):
     the particle methods' keys only, one in the core (workbench/) every key, one in the
     application none."""
     root = tmp_path / "copy"
-    for pkg in ("workbench", "sph", "fem_reference", "studies"):
+    for pkg in ("workbench", "sph", "fem_reference", "studies", "app"):
         shutil.copytree(ROOT / pkg, root / pkg, ignore=shutil.ignore_patterns("__pycache__"))
 
     def edit(rel):
@@ -147,7 +147,7 @@ def test_the_key_covers_the_solver_and_the_core_not_the_studies(tmp_path):
 
     k0 = _keys(root)
     edit("studies/plate.py")
-    edit("workbench/app/report.py")
+    edit("app/report.py")
     assert _keys(root) == k0
     edit("sph/csph.py")
     k1 = _keys(root)

@@ -4,7 +4,7 @@ they are served.
 **Key** (:func:`key`): the run spec — solver, scene class and every scene parameter, resolution,
 solver options — and a hash (:func:`code_hash`) of the code that decides the result: the solver's
 own package (``sph/`` for the particle methods, ``fem_reference/`` for the FEM), the core
-(``workbench/`` without the application ``workbench/app/``), the source file of the scene's class
+(``workbench/``; the application, ``app/``, decides no result and is not part of it), the source file of the scene's class
 and of each of its base classes outside those packages (a user's scene file: its bytes, so two files
 with the same class name and parameters but another geometry get different keys, and an edit of
 ``model()`` gives a new key), and the versions of numpy, scipy, numba and scikit-fem. The studies'
@@ -62,10 +62,7 @@ def cache_dir() -> Path | None:
 def _package_files(root: Path) -> list[Path]:
     if root.is_file():
         return [root]
-    files = sorted(root.rglob("*.py"))
-    if root == _CORE:  # the application decides no result
-        files = [p for p in files if (_CORE / "app") not in p.parents]
-    return files
+    return sorted(root.rglob("*.py"))
 
 
 @functools.lru_cache(maxsize=None)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import atomic_write_text, cpu_model, git_revision
+from workbench.results import atomic_write_text, cpu_model, git_revision
 
 
 def _table(rows: list[dict], cols: list[tuple[str, str, str]]) -> list[list[str]]:

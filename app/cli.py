@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import results
-from ..scenes import ParameterError, with_overrides
+from workbench import results
+from workbench.scenes import ParameterError, with_overrides
 
 
 class UsageError(Exception):
@@ -168,7 +168,7 @@ def load_scene(spec: str):
     import importlib.util
     import inspect
 
-    from ..scenes import Scene
+    from workbench.scenes import Scene
 
     path, _, cls_name = spec.partition(":")
     p = Path(path)

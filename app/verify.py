@@ -10,7 +10,7 @@ from pathlib import Path
 
 from studies.figures import accuracy_vs_cost
 
-from .. import results
+from workbench import results
 from . import report
 
 log = logging.getLogger("workbench")
@@ -129,7 +129,7 @@ def field_section(study, written: str, field_dir: Path, outdir: Path, figures: l
     """Report the field series a study wrote: render one snapshot (appended to ``figures``) where
     this machine can, and return the notes — where the series are (open the .pvd in ParaView) and,
     without a snapshot, why none could be rendered."""
-    from .. import fields
+    from workbench import fields
 
     names = [n.strip() for n in written.split(",") if n.strip()]
     try:
