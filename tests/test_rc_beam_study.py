@@ -221,7 +221,8 @@ def test_largest_value_near_the_end_is_truncated():
                      "ref")
     assert truncation_gate(g, {"csph 12.5 mm": False}) is g
     bad = truncation_gate(g, {"csph 12.5 mm": True, "csph 8.33 mm": False})
-    assert not bad.passed and np.isnan(bad.observed) and "truncated at t_end (csph 12.5 mm" in bad.line()
+    assert not bad.passed and np.isnan(bad.observed)
+    assert "truncated at t_end (csph 12.5 mm" in bad.line()
 
 
 def test_short_run_reports_its_largest_values_as_truncated(short_b):
