@@ -252,6 +252,10 @@ class Run:
                 sel = ps.body == ps.body_names.index(o.body)
                 out[o.name] = math.nan if contact is None else float(contact[sel, o.axis].sum())
                 continue
+            if isinstance(o, M.Momentum):
+                sel = ps.body == ps.body_names.index(o.body)
+                out[o.name] = float(self.body.m[sel] @ self.body.v[sel, o.axis])
+                continue
             if isinstance(o, M.Displacement):
                 if o.set in ps.probes:
                     idx, w = ps.probes[o.set]

@@ -1,6 +1,8 @@
 """The RC beam study (studies/rc_beam.py): conservation (issue 12 gate 3) on short coarse impacts,
 the energy terms it needs (the mortar's plastic and released work in both methods, classic SPH's
 artificial-viscosity dissipation), the dataset contract, and bad input from the command line."""
+from dataclasses import replace as dataclasses_replace
+
 import numpy as np
 import pytest
 
@@ -195,6 +197,118 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
     assert float(kr.sel(kernel_reduction=1)) == float(kr.sel(kernel_reduction=0))
     assert any("kernel reduction" in n for n in rc_beam.report_notes(ds))
     write(ds, tmp_path / "rc_beam.nc")
+
+
+# -- issue 35: a largest value near the run's end is truncated, never a maximum ----------------
+def test_largest_value_near_the_end_is_truncated():
+    """studies.rc_beam.history_maximum on closed-form histories over 10 ms: a displacement still
+    rising at t_end (largest at the end) and one peaking 1.9 ms before it are truncated, one
+    peaking 2.1 ms before it is a maximum (TRUNCATION_MARGIN, 2 ms); the report's text of a
+    truncated value is a lower bound; a gate that reads a truncated value fails, not evaluated."""
+    from studies.common import Gate
+    from studies.rc_beam import TRUNCATION_MARGIN, history_maximum, show_largest, truncation_gate
+
+    t = np.linspace(0.0, 1e-2, 2001)  # records every 5 µs
+    assert TRUNCATION_MARGIN == 2e-3
+    w, when, cut = history_maximum(t, 6.13e-3 * t / t[-1])
+    assert (w, when, cut) == (6.13e-3, 1e-2, True)
+    for t_peak, truncated in ((1e-2 - 1.9e-3, True), (1e-2 - 2.1e-3, False)):
+        w, when, cut = history_maximum(t, 3e-3 * np.sin(0.5 * np.pi * t / t_peak))
+        assert abs(when - t_peak) <= 2.5e-6 and cut == truncated
+    assert show_largest(6.13e-3, 1e-2, True, 1e3, "mm") == "≥ 6.13 mm (truncated at t_end)"
+    assert show_largest(3.01e-3, 4.2e-3, False, 1e3, "mm") == "3.01 mm at 4.2 ms"
+    g = Gate.at_most("B csph: largest displacement at the two finest spacings", 0.01, 0.1, "r",
+                     "ref")
+    assert truncation_gate(g, {"csph 12.5 mm": False}) is g
+    bad = truncation_gate(g, {"csph 12.5 mm": True, "csph 8.33 mm": False})
+    assert not bad.passed and np.isnan(bad.observed)
+    assert "truncated at t_end (csph 12.5 mm" in bad.line()
+
+
+def test_short_run_reports_its_largest_values_as_truncated(short_b):
+    """The 0.25 ms runs end long before the beam's largest displacement: the dataset flags every
+    largest value truncated, the report shows them as lower bounds and does not set them beside
+    003's 3 mm as maxima."""
+    from studies import rc_beam
+
+    scene = RCBeam(t_end=2.5e-4, n_out=50)
+    outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
+    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=True)
+    sel = dict(specimen="B", resolution=8)
+    for m in ("sph", "csph"):
+        assert float(ds.max_displacement_truncated.sel(solver=m, **sel)) == 1
+        assert float(ds.impact_force_window_peak_truncated.sel(solver=m, **sel)) == 1
+        t = float(ds.max_displacement_time.sel(solver=m, **sel))
+        assert 2.5e-4 - t < rc_beam.TRUNCATION_MARGIN
+    notes = rc_beam.report_notes(ds)
+    rows = [n for n in notes if n.startswith("B, ") and "H/dx = 8:" in n]
+    assert len(rows) == 2
+    for n in rows:
+        assert "largest mid-span displacement ≥ " in n and "(truncated at t_end)" in n
+        assert "not comparable" in n
+    bands = [n for n in notes if "energy released per crack area" in n]
+    assert bands and all("largest displacement ≥ " in n for n in bands)
+
+
+def test_dataset_attributes_describe_the_runs(short_b):
+    """Issue 35: the quick run's dataset recorded specimen A (the scene's default) though only B
+    ran. The attributes name the specimens that ran, each with its span and speed, and the run
+    length (B, 0.25 ms), not the scene's defaults (A, 10 ms)."""
+    from studies import rc_beam
+
+    scene = RCBeam(t_end=0.01, n_out=50)  # the default scene, as the study's run gets it
+    outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
+    ds = rc_beam.dataset(dataclasses_replace(scene, t_end=2.5e-4), outs, ["sph", "csph"], [8],
+                         quick=True)
+    assert ds.attrs["param_specimen"] == "B" and ds.attrs["specimens_run"] == "B"
+    assert ds.attrs["param_t_end"] == 2.5e-4
+    assert ds.attrs["specimen_B_impact_velocity"] == 1.4 and ds.attrs["specimen_B_span"] == 0.4
+    assert "specimen_A_span" not in ds.attrs
+
+
+# -- issue 35: the impact force as a load cell sees it ------------------------------------------
+def test_weight_momentum_is_the_impulse_of_the_impact_force():
+    """The weight carries no force but the plate's push along z: the change of its z momentum (the
+    Momentum observable, full beam ``impact_impulse``) equals the trapezoid integral of the contact
+    force recorded at every step (velocity Verlet's impulse), to round-off, over the first 40 µs
+    of specimen B at 12.5 mm (the contact's first ring, 60 steps)."""
+    from sph import driver
+    from studies.rc_beam import OPTIONS
+
+    for m in ("sph", "csph"):
+        out = driver.solve(m, RCBeam(specimen="B", t_end=4e-5, n_out=10 ** 6), 8, **OPTIONS[m])
+        t, F, imp = (np.asarray(out[k], float) for k in ("time", "impact_force", "impact_impulse"))
+        assert len(t) == out["steps"] + 1
+        trap = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(t))])
+        assert imp[-1] > 0.5  # N s: the first ring pushed
+        assert np.max(np.abs(imp - trap)) <= 1e-10 * imp[-1]
+
+
+@pytest.fixture(scope="module")
+def short_b_sparse():
+    """short_b's runs recorded every 50 µs (the full run's 200 records over 10 ms) instead of every
+    5 µs."""
+    from sph import driver
+    from studies.rc_beam import OPTIONS
+
+    s = RCBeam(specimen="B", t_end=2.5e-4, n_out=5)
+    return {m: driver.solve(m, s, 8, **OPTIONS[m]) for m in ("sph", "csph")}
+
+
+@pytest.mark.parametrize("method", ["sph", "csph"])
+def test_load_cell_force_does_not_depend_on_the_record_interval(short_b, short_b_sparse, method):
+    """The same run recorded every 5 µs and every 50 µs: the peak of the impact force's
+    LOAD_CELL_WINDOW (0.1 ms) mean agrees within 1 % (issue 35; the impulse is exact at the
+    records, only its interpolation between them differs: measured ≤ 0.3 % between records every
+    step and every 50 µs), and lies below the penalty's instantaneous peak at the records, which
+    rings with a ~20 µs period."""
+    from studies.rc_beam import LOAD_CELL_WINDOW, window_mean_peak
+
+    assert LOAD_CELL_WINDOW == 1e-4
+    (fa, _), (fb, _) = (window_mean_peak(o[method]["time"], o[method]["impact_impulse"])
+                        for o in (short_b, short_b_sparse))
+    assert abs(fb / fa - 1.0) <= 0.01
+    assert fa < short_b[method]["max_impact_force"]
 
 
 # -- gate 2: the elastic phase against the FEM --------------------------------------------------

@@ -77,7 +77,9 @@ tests/test_rc_beam.py).
 Observed (quarter model; :meth:`RCBeam.summarise` gives the full beam's): the mid-span bottom
 displacement (probe at x = y = z = 0), the weight's mean displacement, the contact force on the
 weight (the impact force) and on the supports (minus the support reaction), and the force that holds
-the support blocks (``support_hold``, the driver's time mean over each record interval).
+the support blocks (``support_hold``, the driver's time mean over each record interval), and
+the weight's z momentum (``weight_momentum``: its change is the impulse of the impact force, the
+weight carrying no other force along z).
 """
 from __future__ import annotations
 
@@ -365,6 +367,7 @@ class RCBeam(Scene):
                          m.Displacement("weight_w", "weight_all", 2),
                          m.ContactForce("weight_force", "weight", 2),
                          m.ContactForce("support_force", "support", 2),
+                         m.Momentum("weight_momentum", "weight", 2),
                          m.Reaction("support_hold", "support_all", 2)),
             notes=(f"003 specimen {self.specimen}: "
                    + ("quarter model (symmetry rollers on x = 0 and y = 0)" if self.symmetry
@@ -402,7 +405,10 @@ class RCBeam(Scene):
         record), ``support_reaction`` (N, both supports together, at the record),
         ``support_reaction_mean`` (N, the force holding the support blocks, its time mean over the
         interval since the previous record: Σ R_k Δt_k is the impulse the supports gave, exactly
-        the change of the momentum of weight plus beam along z), and their peaks."""
+        the change of the momentum of weight plus beam along z), ``impact_impulse`` (N s, the
+        impulse of the plate's push on the weight since t = 0: the change of the weight's z
+        momentum, which carries no other force — exact at any record interval, so that a time
+        mean of the impact force over any window is too), and their peaks."""
         import numpy as np
 
         if "time" not in out or "midspan_w" not in out:
@@ -414,6 +420,9 @@ class RCBeam(Scene):
         extra = {}
         if "support_hold" in out:
             extra["support_reaction_mean"] = c * np.asarray(out["support_hold"], float)
+        if "weight_momentum" in out:
+            p = np.asarray(out["weight_momentum"], float)
+            extra["impact_impulse"] = c * (p - p[0])
         return dict(midspan_displacement=w, impact_force=F, support_reaction=R, **extra,
                     max_displacement=float(np.nanmax(w)) if w.size else math.nan,
                     max_impact_force=float(np.nanmax(F)) if F.size else math.nan,
