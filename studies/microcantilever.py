@@ -1779,13 +1779,33 @@ def fracture_figure(ds: xr.Dataset, path):
     return save(fig, path)
 
 
-def cracked(ds: xr.Dataset, path):
-    """The cracked cantilevers side by side (Fig. 5 and 6 of 000): final particles of the finest
-    run, coloured by grain (the boundaries grey), failed particles red; a 3-D run is shown by its
-    particles within half a spacing of the mid-plane y = 0."""
-    import matplotlib.pyplot as plt
+CRACK_MAP_PAD = 1e-6
+"""Margin of a crack map's axes around the particles it draws, m."""
 
+
+def crack_map_limits(x: np.ndarray, up: int) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(x limits, vertical limits) of a crack map, µm: the deformed positions ``x`` (n, d), m, of
+    every particle drawn — the failed ones wherever they went — with :data:`CRACK_MAP_PAD`
+    around them (the map used to take the reference body's box, which cut out the failed
+    particles that had left it: the inter crack showed as a gap with none drawn)."""
+    lo = np.nanmin(x, axis=0) - CRACK_MAP_PAD
+    hi = np.nanmax(x, axis=0) + CRACK_MAP_PAD
+    return (lo[0] * 1e6, hi[0] * 1e6), (lo[up] * 1e6, hi[up] * 1e6)
+
+
+def cracked(ds: xr.Dataset, path):
+    """The cracked cantilevers side by side (Fig. 5 and 6 of 000), :func:`crack_figure`."""
     from .figures import save
+
+    return save(crack_figure(ds), path)
+
+
+def crack_figure(ds: xr.Dataset):
+    """The figure of :func:`cracked`: final particles of the finest run on the deformed shape,
+    coloured by grain (the boundaries grey), failed particles red, the axes around every particle
+    drawn (:func:`crack_map_limits`); a 3-D run is shown by its particles within half a spacing of
+    the mid-plane y = 0."""
+    import matplotlib.pyplot as plt
 
     names = ds.attrs["region_names"].split(", ")
     rules = list(ds.rule.values)
@@ -1815,13 +1835,12 @@ def cracked(ds: xr.Dataset, path):
             up = X.shape[1] - 1
             col = np.array(["tab:gray" if names[r].startswith("gb") else
                             palette[int(names[r][5:]) % len(palette)] if r >= 0 else "w" for r in reg])
-            lo = np.nanmin(X[ok], axis=0)
-            hi = np.nanmax(X[ok], axis=0)
             m = ok & ~bad
             ax.scatter(x[m, 0] * 1e6, x[m, up] * 1e6, c=col[m], s=6)
             ax.scatter(x[ok & bad, 0] * 1e6, x[ok & bad, up] * 1e6, c="red", s=8)
-            ax.set_xlim((lo[0] - 1e-6) * 1e6, (hi[0] + 2e-6) * 1e6)
-            ax.set_ylim((lo[up] - 1e-6) * 1e6, (hi[up] + 1e-6) * 1e6)
+            xlim, ylim = crack_map_limits(x[ok], up)
+            ax.set_xlim(*xlim)
+            ax.set_ylim(*ylim)
             ax.set_aspect("equal")
             ax.set_title(f"{case}-granular, {rule}, H/dx = "
                          f"{int(ds.particle_resolution.sel(case=case, rule=rule))}", fontsize=9)
@@ -1850,4 +1869,4 @@ def cracked(ds: xr.Dataset, path):
             Line2D([], [], ls="", marker="o", color="red", label="failed / deleted (D >= 1)")]
     axes[-1, 0].legend(handles=key, loc="upper left", bbox_to_anchor=(0.0, -0.3), ncol=4,
                        fontsize=8, frameon=False)
-    return save(fig, path)
+    return fig
