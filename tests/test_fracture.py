@@ -92,10 +92,10 @@ def test_a_compressed_failed_particle_stays_until_it_opens():
 
 
 def test_after_pairs_change_the_step_ends_with_their_force():
-    """The step in which a particle fails ends with the force of the new pairs (sph.crack
-    updates them at its end): the acceleration the time loop leaves is (f(x) + f_ext)/m of the
-    new pairs at the synchronised positions, and the second half-kick was taken with it — the
-    force of the broken pairs does not act on into the next step (total_lagrangian._kick_again).
+    """After the step in which a particle fails (sph.crack updates the pairs at its end) the
+    acceleration the time loop leaves is (f(x) + f_ext)/m of the new pairs at the synchronised
+    positions: the next step's first half-kick takes the force of the pairs it integrates with,
+    not that of the broken ones (total_lagrangian._new_force).
     A block stretched 0.3 % along x, beyond yield, one particle already at ε_p just below ε_L:
     it fails in the first step."""
     from workbench.materials import HIST_DAMAGE, HIST_EPS_P
@@ -111,14 +111,12 @@ def test_after_pairs_change_the_step_ends_with_their_force():
     body.start(np.zeros_like(X), f_ext)
     acc0 = body.acc.copy()
     dt = body.time_step(0.3)
-    v_half = 0.5 * dt * acc0  # the first half-kick from rest
     assert body.advance(1, dt, f_ext, fixed, np.zeros_like(X)) == 1
     assert body.cracks.failed[a] and body.cracks.pairs_cut > 0
     expected = body.tl.evaluate(body.x) / body.m[:, None]  # the new pairs at the end state
     scale = np.abs(expected).max()
     assert np.abs(acc0[a]).max() > 1e-3 * scale  # a was loaded: the broken pairs mattered
     assert np.allclose(body.acc, expected, rtol=0, atol=1e-9 * scale)
-    assert np.allclose(body.v, v_half + 0.5 * dt * expected, rtol=0, atol=1e-9 * scale * dt)
 
 
 def _pairs(body):
