@@ -793,3 +793,19 @@ def test_crack_map_draws_every_particle(monkeypatch, tmp_path):
         um = x * 1e6
         assert np.all((um[:, 0] >= x0) & (um[:, 0] <= x1)), (x0, x1, um[:, 0].max())
         assert np.all((um[:, 1] >= y0) & (um[:, 1] <= y1)), (y0, y1, um[:, 1].min())
+
+
+def test_fragment_measures():
+    """fragment_measures: the largest speed of the failed particles and their kinetic energy
+    Σ ½ ρ V |v|² over the released energy, by hand on three particles (two failed); NaN without
+    velocities."""
+    from studies.microcantilever import fragment_measures
+
+    sc = MicroCantilever(dim=2)
+    out = dict(v=np.array([[3.0, 4.0], [0.0, 1.0], [9.0, 9.0]]), volume=np.array([2e-12, 1e-12, 1e-12]),
+               failed_particles=np.array([True, True, False]), released_energy=np.array([0.0, 1e-6]))
+    m = fragment_measures(out, sc)
+    assert m["fragment_speed_max"] == pytest.approx(5.0)
+    ke = 0.5 * sc.rho * (2e-12 * 25.0 + 1e-12 * 1.0)
+    assert m["fragment_kinetic_share"] == pytest.approx(ke / 1e-6, rel=1e-12)
+    assert np.isnan(fragment_measures({**out, "v": None}, sc)["fragment_speed_max"])
