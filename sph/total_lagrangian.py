@@ -735,7 +735,7 @@ def _new_force(body: Body, x, acc, f_ext) -> None:
     keeps its O(dt²)). Before, the next step began with the force of the old pairs, so the broken
     pairs acted half a step longer on particles whose own stress had gone (measured, the literal
     rule, studies.microcantilever 2-D H/Δx = 5: failed particles at up to 2.4 and 3.3 m/s
-    (inter, intra) before, 1.4 and 2.4 m/s with it). Redoing the finished step's second
+    (inter, intra) before, 1.8 and 2.1 m/s with it). Redoing the finished step's second
     half-kick with the new force too removed more of that kick but broke the balance by
     ½ dt v·Δf at every change (0.71 and 0.85 % of the external work against 0.19 and 0.22 %)."""
     acc[:] = (body.evaluate(np.ascontiguousarray(x)) + f_ext) / body.disc.m[:, None]
