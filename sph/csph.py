@@ -263,13 +263,18 @@ class CSPH(ParticleBody):
         self.t += done * dt
         return done
 
-    def _update_cracks(self) -> None:
-        """New failures: the pairs of the visibility criterion (:mod:`sph.crack`), the stored
-        energy they release added to the released energy."""
+    def _update_cracks(self, new: bool = True) -> bool:
+        """New failures (``new``), or failed particles that were compressed and have opened: the
+        pairs of the visibility criterion (:mod:`sph.crack`), the stored energy they release added
+        to the released energy. Returns whether the pairs changed."""
         from workbench.materials import HIST_DAMAGE
 
+        if not new and not self.cracks.compressed.any():
+            return False
         failed = self._j2 & (self.tl.history[:, HIST_DAMAGE] >= 1.0)
+        before = self.cracks.updates
         self.cracks.update(failed, self.x, self.stored_energy)
+        return self.cracks.updates != before
 
     def internal_force(self, x):
         return self.tl.evaluate(np.ascontiguousarray(x))

@@ -603,7 +603,7 @@ class Run:
             out[n] = np.asarray(v)
         # the final state: reference and current positions, regions, and the failed particles
         state = body.field_state()
-        out.update(X=ps.X.copy(), x=body.x.copy(), region=ps.region.copy(),
+        out.update(X=ps.X.copy(), x=body.x.copy(), v=body.v.copy(), region=ps.region.copy(),
                    region_names=list(ps.region_names),
                    sets={k: np.asarray(v).copy() for k, v in ps.sets.items()},
                    **self.material_state(state))

@@ -35,10 +35,13 @@ def F_of(body, x):
 def test_visibility_keeps_F_and_affine_exactness():
     """After a column of particles fails, every row that lost pairs keeps its F at the current
     (non-affine) state and gives A F for any later affine motion x ↦ A x + c; no pair between
-    intact particles on opposite sides of the column is left."""
+    intact particles on opposite sides of the column is left. (The state is stretched by 2 %
+    along x, so that the failed column is in tension, J > 1: a failed particle still compressed
+    stays in its neighbours' rows, test_a_compressed_failed_particle_stays_until_it_opens.)"""
     ps, body = block()
     X = ps.X
-    x = X + 0.01 * np.stack([np.sin(X[:, 1]) * X[:, 0] / 12, 0.5 * np.cos(X[:, 0] / 3)], 1)
+    x = X * np.array([1.02, 1.0]) + 0.01 * np.stack([np.sin(X[:, 1]) * X[:, 0] / 12,
+                                                     0.5 * np.cos(X[:, 0] / 3)], 1)
     F0 = F_of(body, x)
     failed = X[:, 0] == 6
     body.cracks.update(failed, x, lambda: 0.0)
@@ -55,6 +58,65 @@ def test_visibility_keeps_F_and_affine_exactness():
     across = (left[rows] & right[d.indices]) | (right[rows] & left[d.indices])
     assert np.all(d.G[across] == 0.0)
     assert np.all(d.G[~failed[rows] & failed[d.indices]] == 0.0)  # intact rows see no failed one
+
+
+def test_a_compressed_failed_particle_stays_until_it_opens():
+    """Under the compression rule a particle that fails compressed (J < 1) keeps its pressure and
+    stays in its neighbours' rows (it blocks no view), so that their stresses still balance it;
+    once J ≥ 1 it is blocked as any failed particle (sph.crack). Here the top-face particle over
+    the middle column fails under a uniform compression of 0.3 %: its neighbours' pairs with it
+    stay; stretched by 0.5 % the same state opens it and they go. Under the literal rule (no
+    pressure) it is blocked at once."""
+    ps, body = block()
+    X = ps.X
+    a = int(np.flatnonzero((X[:, 0] == 6) & (X[:, 1] == 5))[0])
+    failed = np.zeros(ps.n, bool)
+    failed[a] = True
+    d = body.disc
+    into_a = d.indices == a  # the pairs (b, a) in the rows of a's neighbours
+    assert into_a.sum() >= 5
+    x = 0.997 * X
+    body.cracks.update(failed, x, lambda: 0.0)
+    assert np.all(np.any(d.G[into_a] != 0.0, axis=1))
+    assert body.cracks.compressed[a] and not body.cracks.blocked[a]
+    assert not body.cracks.opened(x).any()
+    x = 1.005 * X
+    assert body.cracks.opened(x)[a]
+    body.cracks.update(failed, x, lambda: 0.0)  # nothing new failed: the opened one is blocked
+    assert body.cracks.blocked[a] and not body.cracks.compressed[a]
+    assert np.all(d.G[into_a] == 0.0)
+
+    ps, body = block(failure="literal")
+    body.cracks.update(failed, 0.997 * ps.X, lambda: 0.0)
+    assert body.cracks.blocked[a] and not body.cracks.compressed.any()
+
+
+def test_after_pairs_change_the_step_ends_with_their_force():
+    """After the step in which a particle fails (sph.crack updates the pairs at its end) the
+    acceleration the time loop leaves is (f(x) + f_ext)/m of the new pairs at the synchronised
+    positions: the next step's first half-kick takes the force of the pairs it integrates with,
+    not that of the broken ones (total_lagrangian._new_force).
+    A block stretched 0.3 % along x, beyond yield, one particle already at ε_p just below ε_L:
+    it fails in the first step."""
+    from workbench.materials import HIST_DAMAGE, HIST_EPS_P
+
+    ps, body = block(failure="literal")
+    X = ps.X
+    a = int(np.flatnonzero((X[:, 0] == 6) & (X[:, 1] == 3))[0])
+    body.tl.history[a, HIST_EPS_P] = 0.0099  # ε_L = 0.01
+    body.tl.history[a, HIST_DAMAGE] = 0.99
+    body.x[:] = X * np.array([1.003, 1.0])
+    f_ext = np.zeros_like(X)
+    fixed = np.zeros(X.shape, np.uint8)
+    body.start(np.zeros_like(X), f_ext)
+    acc0 = body.acc.copy()
+    dt = body.time_step(0.3)
+    assert body.advance(1, dt, f_ext, fixed, np.zeros_like(X)) == 1
+    assert body.cracks.failed[a] and body.cracks.pairs_cut > 0
+    expected = body.tl.evaluate(body.x) / body.m[:, None]  # the new pairs at the end state
+    scale = np.abs(expected).max()
+    assert np.abs(acc0[a]).max() > 1e-3 * scale  # a was loaded: the broken pairs mattered
+    assert np.allclose(body.acc, expected, rtol=0, atol=1e-9 * scale)
 
 
 def _pairs(body):

@@ -816,3 +816,63 @@ def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_p
     assert (tmp_path / "microcantilever_root_first_failure.png").stat().st_size > 0
     notes = study.report_notes(ds)
     assert sum(n.startswith("gate 2 (first failure in the root region") for n in notes) == 2
+
+
+def test_crack_map_draws_every_particle(monkeypatch, tmp_path):
+    """The crack map (studies.microcantilever.cracked) draws the final particles on the deformed
+    shape and its axes cover every one drawn: a failed particle that has left the body's
+    reference box by 10 µm (a fragment) and one 3 µm below it are inside each panel's limits, and
+    so is every intact particle. (The map took the reference box: those fell outside.)"""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import xarray as xr
+
+    from studies import figures, microcantilever as mc
+
+    figs = []
+    monkeypatch.setattr(figures, "save", lambda fig, path: figs.append(fig) or path)
+    dx = 1e-6
+    ix, iy = np.meshgrid(np.arange(-5, 21), np.arange(-3, 3), indexing="ij")
+    X = np.stack([ix.ravel(), iy.ravel()], 1) * dx + np.array([0.0, 0.5 * dx])
+    n = len(X)
+    x = X + np.stack([np.zeros(n), -1e-8 * np.clip(X[:, 0], 0, None) / dx], 1)
+    failed = np.zeros(n, np.int8)
+    far, low = n - 1, n // 2
+    failed[[far, low]] = 1
+    x[far] += np.array([10e-6, 4e-6])  # a fragment, far off the free end
+    x[low, 1] -= 3e-6
+    xs = np.stack([x, x])[:, None]  # (case, rule, particle, axis)
+    ds = xr.Dataset(
+        dict(particle_X=(("case", "rule", "particle", "axis"), np.stack([X, X])[:, None]),
+             particle_x=(("case", "rule", "particle", "axis"), xs),
+             particle_region=(("case", "rule", "particle"), np.zeros((2, 1, n), np.int64)),
+             particle_failed=(("case", "rule", "particle"), np.stack([failed, failed])[:, None]),
+             particle_resolution=(("case", "rule"), np.full((2, 1), 5))),
+        coords=dict(case=["inter", "intra"], rule=["compression"]),
+        attrs=dict(region_names="grain0", param_H=5e-6, plane="strain"))
+    mc.cracked(ds, tmp_path / "cracks.png")
+    (fig,) = figs
+    panels = [ax for ax in fig.axes if ax.collections]
+    assert len(panels) == 2
+    for ax in panels:
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        um = x * 1e6
+        assert np.all((um[:, 0] >= x0) & (um[:, 0] <= x1)), (x0, x1, um[:, 0].max())
+        assert np.all((um[:, 1] >= y0) & (um[:, 1] <= y1)), (y0, y1, um[:, 1].min())
+
+
+def test_fragment_measures():
+    """fragment_measures: the largest speed of the failed particles and their kinetic energy
+    Σ ½ ρ V |v|² over the released energy, by hand on three particles (two failed); NaN without
+    velocities."""
+    from studies.microcantilever import fragment_measures
+
+    sc = MicroCantilever(dim=2)
+    out = dict(v=np.array([[3.0, 4.0], [0.0, 1.0], [9.0, 9.0]]), volume=np.array([2e-12, 1e-12, 1e-12]),
+               failed_particles=np.array([True, True, False]), released_energy=np.array([0.0, 1e-6]))
+    m = fragment_measures(out, sc)
+    assert m["fragment_speed_max"] == pytest.approx(5.0)
+    ke = 0.5 * sc.rho * (2e-12 * 25.0 + 1e-12 * 1.0)
+    assert m["fragment_kinetic_share"] == pytest.approx(ke / 1e-6, rel=1e-12)
+    assert np.isnan(fragment_measures({**out, "v": None}, sc)["fragment_speed_max"])
