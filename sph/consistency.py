@@ -76,7 +76,10 @@ lattice; numbers in the report of this change):
 
 The multiplier system is factorised once (scipy's SuperLU in symmetric mode) and refined on the
 true residual of the corrected gradients; set-up (2-D plate, 2 cores) 2 s at 2e4 particles and
-18 s at 1e5 with the quadratic basis (10 s linear), 8–30× :func:`sph.csph.discretise`.
+18 s at 1e5 with the quadratic basis (10 s linear), 8–30× :func:`sph.csph.discretise`. In 3-D
+the factors fill in (14.5 GB at 1e5 particles): above :data:`AMG_ABOVE` unknowns the system is
+solved instead by conjugate gradients with the polynomial smoothed-aggregation hierarchy of
+:mod:`sph.polynomial_amg`, whose memory grows linearly (32 kB a particle at 4e4 and 9e4).
 """
 from __future__ import annotations
 
@@ -821,9 +824,13 @@ def consistent_gradients(X, V, indptr, indices, G, normals, free, basis: str = "
 
 SOLVERS = ("auto", "direct", "amg")
 
-AMG_ABOVE = 20_000
-"""Unknowns of eq. C3 above which ``solver="auto"`` solves it by AMG-CG in 3-D (measured on the
-3-D micro-cantilever, module docstring of :mod:`sph.polynomial_amg`)."""
+AMG_ABOVE = 30_000
+"""Unknowns of eq. C3 above which ``solver="auto"`` solves it by AMG-CG in 3-D. Measured on the
+3-D micro-cantilever (quadratic basis, two groups of components, 2 cores under a load of 5–8):
+at 11 000 unknowns SuperLU's set-up is 2.5× faster (16 s against 40 s); at 36 000 the two take
+the same time (157 s, 173 s) and AMG a third of the memory (1.2 GB against 3.3 GB); at 86 000
+AMG takes 435 s and 2.8 GB where SuperLU took 623 s and 14.5 GB at 101 000 on an idle machine
+(module docstring of :mod:`sph.polynomial_amg`)."""
 
 AMG_RTOL = 1e-10
 """Relative residual of the first AMG-CG solve of eq. C3: the refinement passes re-solve on the

@@ -17,6 +17,17 @@ across them: its fit is rank-deficient and the zero column would make the coarse
 singular), and the prolongator is smoothed by one damped Jacobi step on the finest level
 (Vaněk, Mandel & Brezina, *Computing* 56, 1996). Symmetric Gauss–Seidel smooths, SuperLU solves
 the coarsest level, and the V-cycle preconditions conjugate gradients.
+
+Measured on the 3-D micro-cantilever's system (quadratic basis, 2 cores under a load of 5–8):
+boxes of 4 spacings take 16 and 24 iterations to 1e-10 at 11 000 and 36 000 unknowns, but their
+smoothed prolongator reaches (4 + 2·4)/4 boxes each way and the Galerkin product at 86 000
+unknowns took more than 5.6 GB; boxes of 6 (the default) take 65 at 36 000 unknowns (operator
+complexity 1.14, coarse level 2 060 unknowns), set-up 5.6 s against 8.5 s and a third of the
+time an iteration. A coarser level left unsmoothed does not converge within 150 iterations, so
+every level is smoothed, and up to :data:`MAX_COARSE` unknowns are solved directly. pyamg's own
+set-up keeps the rank-deficient columns as zero columns: with boxes of 4 at 36 000 unknowns CG
+then diverged (residual ratio 1.9 after 500 iterations, pyamg's default candidate smoothing) or
+crawled (1.5e-8 after 60), against 24 iterations to 1e-10 with them dropped.
 """
 from __future__ import annotations
 
