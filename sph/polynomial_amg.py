@@ -122,9 +122,11 @@ class PolynomialAMG:
         self.M = self.ml.aspreconditioner(cycle="V")
         self.shape = K.shape
 
-    def solve(self, K, b: np.ndarray, rtol: float = 1e-10, maxiter: int = MAXITER, x0=None):
+    def solve(self, K, b: np.ndarray, rtol: float = 1e-10, maxiter: int | None = None, x0=None):
         """(x, converged, iterations): CG on K x = b preconditioned by one V-cycle, to
-        ‖K x − b‖ ≤ rtol ‖b‖ (the true residual checked)."""
+        ‖K x − b‖ ≤ rtol ‖b‖ (the true residual checked), within ``maxiter`` iterations
+        (default :data:`MAXITER`)."""
+        maxiter = MAXITER if maxiter is None else maxiter
         count = [0]
 
         def cb(_):

@@ -279,7 +279,22 @@ def amg_and_direct(request):
         out[solver] = cs.consistent_discretisation(disc, Vi, nrm, free, basis="quadratic",
                                                    weights="uniform", solver=solver)
         mp.undo()
-    return out, fixed
+    return out, fixed, (disc, Vi, nrm, free)
+
+
+def test_amg_solve_that_misses_falls_back_to_the_direct_one(amg_and_direct, monkeypatch):
+    """A CG solve that misses its tolerance (here: one iteration allowed) is done by SuperLU: the
+    gradients are the direct solve's, the fallback counted."""
+    from sph import polynomial_amg
+
+    out, _, (disc, Vi, nrm, free) = amg_and_direct
+    monkeypatch.setattr(polynomial_amg, "MAX_COARSE", 150)
+    monkeypatch.setattr(polynomial_amg, "MAXITER", 1)
+    new, info = cs.consistent_discretisation(disc, Vi, nrm, free, basis="quadratic",
+                                             weights="uniform", solver="amg")
+    assert info["solver_fallbacks"] > 0 and info["column_residual"] < PATCH_TOL
+    ref = out["direct"][0].G
+    assert np.abs(new.G - ref).max() < PATCH_TOL * np.abs(ref).max()
 
 
 def test_amg_solve_gives_the_direct_gradients(amg_and_direct):
@@ -298,7 +313,7 @@ def test_amg_solve_gives_the_direct_gradients(amg_and_direct):
 
 def test_force_patch_test_with_the_amg_solve(amg_and_direct):
     """The force patch test of :func:`test_force_patch_test` on the gradients of the AMG solve."""
-    out, fixed = amg_and_direct
+    out, fixed, _ = amg_and_direct
     new, info = out["amg"]
     for A in (A_STRETCH, A_SHEAR, A_BOTH):
         assert _patch_residual(new, info["normals"], fixed, A, MAT3) < PATCH_TOL
