@@ -827,10 +827,10 @@ SOLVERS = ("auto", "direct", "amg")
 AMG_ABOVE = 30_000
 """Unknowns of eq. C3 above which ``solver="auto"`` solves it by AMG-CG in 3-D. Measured on the
 3-D micro-cantilever (quadratic basis, two groups of components, 2 cores under a load of 5–8):
-at 11 000 unknowns SuperLU's set-up is 2.5× faster (16 s against 40 s); at 36 000 the two take
-the same time (157 s, 173 s) and AMG a third of the memory (1.2 GB against 3.3 GB); at 86 000
-AMG takes 435 s and 2.8 GB where SuperLU took 623 s and 14.5 GB at 101 000 on an idle machine
-(module docstring of :mod:`sph.polynomial_amg`)."""
+at 12 000 particles (11 000 unknowns) SuperLU's whole correction is 4× faster (12.5 s against
+50 s); at 38 000 (36 000 unknowns) the two take about the same time (157 s, 173 s) and AMG a
+third of the memory (1.2 GB against 3.3 GB); at 87 800 particles AMG takes 435 s and 2.8 GB,
+where SuperLU took 623 s and 14.5 GB at 101 000 on an idle machine."""
 
 AMG_RTOL = 1e-10
 """Relative residual of the first AMG-CG solve of eq. C3: the refinement passes re-solve on the
