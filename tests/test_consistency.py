@@ -258,6 +258,67 @@ def test_force_patch_test(dim, base, jitter, A):
     assert _patch_residual(base_disc, nrm, fixed, A, mat) > BASE_MISS
 
 
+@pytest.fixture(scope="module")
+def amg_and_direct(request):
+    """A jittered 3-D box (17 × 13 × 9 nodes, held layer behind X = 0, a roller plane, quadratic
+    basis) corrected twice: eq. C3 solved by SuperLU and by the polynomial AMG, its coarsest level
+    made small enough (:data:`sph.polynomial_amg.MAX_COARSE` = 150) that the hierarchy has three
+    levels. The 13 nodes along Y put boxes of one layer at the far face (boxes of 6 spacings):
+    their quadratic fit is rank-deficient."""
+    from sph import polynomial_amg
+
+    X, Vi, nrm, disc, dx, size = _box(3, 16, 0.2, held=1, base="quadratic")
+    fixed = np.zeros(X.shape, bool)
+    fixed[X[:, 0] < 1e-9 * dx] = True
+    fixed[np.isclose(X[:, 1], 0.0) & (X[:, 0] > 1e-9 * dx), 1] = True
+    free = cs.column_mask(fixed, "particle")
+    out = {}
+    for solver in ("direct", "amg"):
+        mp = pytest.MonkeyPatch()
+        mp.setattr(polynomial_amg, "MAX_COARSE", 150)
+        out[solver] = cs.consistent_discretisation(disc, Vi, nrm, free, basis="quadratic",
+                                                   weights="uniform", solver=solver)
+        mp.undo()
+    return out, fixed, (disc, Vi, nrm, free)
+
+
+def test_amg_solve_that_misses_falls_back_to_the_direct_one(amg_and_direct, monkeypatch):
+    """A CG solve that misses its tolerance (here: one iteration allowed) is done by SuperLU: the
+    gradients are the direct solve's, the fallback counted."""
+    from sph import polynomial_amg
+
+    out, _, (disc, Vi, nrm, free) = amg_and_direct
+    monkeypatch.setattr(polynomial_amg, "MAX_COARSE", 150)
+    monkeypatch.setattr(polynomial_amg, "MAXITER", 1)
+    new, info = cs.consistent_discretisation(disc, Vi, nrm, free, basis="quadratic",
+                                             weights="uniform", solver="amg")
+    assert info["solver_fallbacks"] > 0 and info["column_residual"] < PATCH_TOL
+    ref = out["direct"][0].G
+    assert np.abs(new.G - ref).max() < PATCH_TOL * np.abs(ref).max()
+
+
+def test_amg_solve_gives_the_direct_gradients(amg_and_direct):
+    """The iterative solve of eq. C3 (``solver="amg"``) gives the gradients of the direct one: C3
+    is SPD once pinned, so its solution — and δG — is unique, and both are refined on the true
+    column residual to ~1e-14; PATCH_TOL (1e-10 of max |G|) leaves four orders for the
+    cancellation in δG (the correction is O(1) of G at the faces)."""
+    (d_new, d_info), (a_new, a_info) = amg_and_direct[0]["direct"], amg_and_direct[0]["amg"]
+    assert d_info["solver"] == ["direct"] and a_info["solver"] == ["amg"]
+    assert a_info["solver_levels"] == [3] and a_info["solver_fallbacks"] == 0
+    assert 0 < a_info["solver_iterations"] < 3 * 3 * 60  # ≤ 60 CG iterations a solve
+    assert a_info["column_residual"] < PATCH_TOL and a_info["row_residual"] < PATCH_TOL
+    assert np.abs(a_new.G - d_new.G).max() < PATCH_TOL * np.abs(d_new.G).max()
+    assert a_info["correction"] > BASE_MISS  # the correction is not trivial
+
+
+def test_force_patch_test_with_the_amg_solve(amg_and_direct):
+    """The force patch test of :func:`test_force_patch_test` on the gradients of the AMG solve."""
+    out, fixed, _ = amg_and_direct
+    new, info = out["amg"]
+    for A in (A_STRETCH, A_SHEAR, A_BOTH):
+        assert _patch_residual(new, info["normals"], fixed, A, MAT3) < PATCH_TOL
+
+
 def test_force_patch_test_dof_mask_on_symmetry_planes():
     """Column mask 'dof' (the normal column of a roller dropped): exact for every P without shear
     on the roller planes (here a diagonal P: the uniaxial state), 3-D, rollers on three planes."""
@@ -460,6 +521,9 @@ def test_consistent_gradients_rejects_bad_input():
         cs.pair_weights(X, disc.indptr, disc.indices, 0.5, "gauss")
     with pytest.raises(ValueError, match="mode"):
         cs.column_mask(~free, "all")
+    with pytest.raises(ValueError, match="solver"):
+        cs.consistent_gradients(X, Vi, disc.indptr, disc.indices, disc.G, nrm, free,
+                                solver="cholesky")
 
 
 def test_excluded_nodes_carry_no_volume_and_the_total_is_kept():
@@ -593,3 +657,22 @@ def test_cantilever_tip_h10_against_fem(method, law):
     r = driver.solve(method, scene, 10)
     err = r["tip_deflection"] / fem.reference(scene, "tip_deflection") - 1
     assert np.abs(err).max() < gate, err
+
+
+def test_polynomial_amg_drops_what_an_aggregate_cannot_carry():
+    """On a slab two particles thick every box aggregate (6 × 6 × 2 points) carries 9 of the 10
+    quadratics (z² is linear on two planes): the coarse level has 9 unknowns per box and no zero
+    row (a zero column of the tentative prolongator would make the coarse operator singular)."""
+    from sph.polynomial_amg import PolynomialAMG
+
+    g = np.arange(12.0)
+    X = np.stack(np.meshgrid(g, g, [0.0, 1.0], indexing="ij"), axis=-1).reshape(-1, 3)
+    n = len(X)
+    D = np.abs(X[:, None, :] - X[None, :, :]).sum(-1)
+    K = np.where(D == 1, -1.0, 0.0)
+    K[np.diag_indices(n)] = -K.sum(1) + 1e-3  # a lattice Laplacian, shifted: SPD
+    B = cs._polys(X, True)
+    amg = PolynomialAMG(K, X, B, 1.0, box=6, max_levels=2, max_coarse=10)
+    Ac = amg.ml.levels[1].A
+    assert Ac.shape[0] == 4 * 9
+    assert np.all(Ac.diagonal() > 0)
