@@ -55,6 +55,7 @@ quantities.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import importlib
 import math
 import time
@@ -140,8 +141,6 @@ def solve(method: str, scene, resolution: int, lattice: str | None = None, field
     :mod:`studies.stability_theory`) — a static path stops where it returns true (the later
     values' status :data:`workbench.results.STOPPED`); the other ``options`` go to the method's
     ``build``."""
-    import dataclasses
-
     t0 = time.perf_counter()
     mod, defaults = method_entry(method)
     options = {**defaults, **options}
@@ -428,8 +427,6 @@ class Run:
         drive = self.model.drive
         if (drive.disorder is None and default_disorder is not None
                 and self.ps.table.n_history == 0):
-            import dataclasses
-
             drive = dataclasses.replace(drive, disorder=default_disorder)
         body, ps = self.body, self.ps
         dt, fixed, f_ext, v_fix, extra, contact = self.start_explicit()
