@@ -43,7 +43,8 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     ``observe(u)`` returns the scalar (or array) recorded each step (e.g. a tip displacement);
     ``snapshot(step, t, u, v)`` (optional) is called at the start and after every step (field
     output; it decides which steps it writes); ``callback(step, t, state, v)`` (optional) too, with
-    the committed :class:`~fem_reference.static.State`.
+    the committed :class:`~fem_reference.static.State`; a true return value of ``callback``
+    ends the run there (status ok, ``stopped`` True: a stop rule of the drive).
     The initial acceleration solves M a₀ = f_ext(0) − f_int(u₀) − c M v₀ on the free DOFs
     (``damping`` c, 1/s: mass-proportional damping, module docstring). ``initial_tangent``:
     modified Newton with the initial effective matrix (module docstring). A step whose Newton
@@ -91,8 +92,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
     iteration = effective(state, M_ff) if initial_tangent else None
     if snapshot is not None:
         snapshot(0, 0.0, u, v)
-    if callback is not None:
-        callback(0, 0.0, state, v)
+    stopped = callback is not None and bool(callback(0, 0.0, state, v))
     run = dict(state=state, u=u, v=v, a=a, M_full=M_full, M_ff=M_ff, iteration=iteration)
 
     def advance(t0, h, depth):
@@ -136,7 +136,7 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         run.update(state=st, u=st.u, v=v_new, a=a_new)
         return None
 
-    for n in range(n_steps):
+    for n in range(0 if stopped else n_steps):
         tn = (n + 1) * dt
         why = advance(n * dt, dt, 0)
         if why is not None:
@@ -149,8 +149,9 @@ def newmark(problem: Problem, v0: np.ndarray, dt: float, n_steps: int, observe,
         se.append(problem.stored_energy(state))
         if snapshot is not None:
             snapshot(n + 1, t[-1], u, v)
-        if callback is not None:
-            callback(n + 1, tn, state, v)
+        if callback is not None and callback(n + 1, tn, state, v):
+            stopped = True
+            break
     return dict(time=np.array(t), observed=np.array(obs), kinetic_energy=np.array(ke),
                 strain_energy=np.array(se), status=status, newton_iterations=iters,
-                deleted=np.array(deleted, dtype=np.int64))
+                deleted=np.array(deleted, dtype=np.int64), stopped=stopped)

@@ -650,6 +650,9 @@ def _static(fm: FemModel, t0: float, options: dict, series) -> dict:
     if j2:
         out["eps_p"] = np.full(n, np.nan)
 
+    if drive.stop:
+        out["t_threshold"] = math.nan  # the load parameter at which a stop rule held
+
     def measure(k, lam, state):
         for key, v in observe(fm, state, lam).items():
             out[key][k] = v
@@ -657,6 +660,10 @@ def _static(fm: FemModel, t0: float, options: dict, series) -> dict:
             out["eps_p"][k] = plastic_strain(fm.problem, state, "mean")
         if series is not None:
             series(lam, state.u)
+        held = [r for r in drive.stop if r.holds(out[r.of][k])]
+        if held and not math.isfinite(out["t_threshold"]):
+            out["t_threshold"], out["threshold"] = float(lam), held[0].describe()
+        return bool(held)  # the path ends there (the drive's stop rules)
 
     solver = TangentSolver()
     kw = {k: options[k] for k in ("max_increment", "min_increment", "rtol", "maxit")
@@ -804,6 +811,8 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
             impulse["sum"][k] += 0.5 * h * (impulse["prev"].get(k, now) + now)
             impulse["prev"][k] = now
 
+    stops = dict(t=math.nan, rule=None)
+
     def callback(step, t, state, v):
         f = fm.problem.external(t)
         if work["u"] is not None:
@@ -819,6 +828,12 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
             impulse["t"] = t
             steps_rec.append(step)
             w_rec.append(work["w"])
+            # the drive's stop rules: ``after`` seconds past the first record where one holds
+            held = [r for r in drive.stop if r.holds(rec[r.of][-1])]
+            if held and stops["rule"] is None:
+                stops.update(t=t, rule=held[0])
+            return stops["rule"] is not None and t >= stops["t"] + stops["rule"].after * (1 - 1e-9)
+        return False
 
     def history(u):
         return np.array([_displacement(fm, o, u) for o in sources])
@@ -858,6 +873,12 @@ def _explicit(fm: FemModel, t0: float, options: dict, fields, name: str) -> dict
         out[p.name] = m["period"]
         out[f"{p.name}_amplitude"] = m["amplitude"]
         out[f"{p.name}_status"] = m["status"]
+    if drive.stop:
+        out["t_threshold"] = stops["t"]
+        out["criterion"] = "threshold" if stops["rule"] is not None and run is not None \
+            and run["stopped"] else "none"
+        if stops["rule"] is not None:
+            out["threshold"] = stops["rule"].describe()
     return out
 
 

@@ -17,11 +17,13 @@
    force plus :mod:`sph.contact`, weighted on the symmetry planes: :meth:`Run.mirror_planes`),
    loads that vary in time updated at chunk midpoints (chunks of at most
    :data:`MAX_CHUNK_VARYING` steps then; the records stay about ``n_out``);
-5. **monitor** (explicit) — the one criterion of :mod:`sph.monitor`; with the drive's
-   ``separate`` the run also stops ``after`` seconds past the first record at which no chain of
-   intact particles joins two sets (:meth:`Run.separated`, a crack has cut the body: status ``ok``,
-   criterion ``separated``, the time in ``t_separated``, the state then in ``at_separation``:
-   :meth:`Run.cut_state`);
+5. **stop rules** — explicit: the rules of :mod:`sph.stopping` after every record (the one
+   stability criterion of :mod:`sph.monitor`; with the drive's ``separate``, ``after`` seconds
+   past the first record at which no chain of intact particles joins two sets —
+   :meth:`Run.separated`, a crack has cut the body: status ``ok``, criterion ``separated``, the
+   time in ``t_separated``, the state then in ``at_separation``: :meth:`Run.cut_state`; the
+   drive's :class:`~workbench.scenes.model.Threshold` rules: criterion ``threshold``, the time
+   in ``t_threshold``); static: the path ends at the first value where a Threshold holds;
 6. **measure** — the model's observables after every load value (static) or chunk (explicit), the
    energies, field snapshots (``fields=<folder>``) between chunks; the scene's
    :meth:`~workbench.scenes.params.Scene.summarise` adds its study's quantities.
@@ -69,9 +71,9 @@ from workbench.scenes import model as M
 from workbench.scenes.params import SceneError
 
 from . import METHODS
-from .diagnostics import linear_momentum
-from .monitor import Disorder, EnergyGrowth, energy_floor
 from .particles import TOL, Particles, discretise
+from .records import Records
+from .stopping import explicit_rules, ordered
 
 def jit_estimate(first_time: float, first_work: float, rest_time: float, rest_work: float) -> float:
     """The JIT compilation (and numba cache loading) in a loop's first chunk, s: its time less
@@ -315,6 +317,8 @@ class Run:
         out = dict(parameter=path, parameter_name=drive.parameter,
                    wall_time=np.full(len(path), np.nan), iterations=np.zeros(len(path), int),
                    **{n: np.full(len(path), np.nan) for n in names})
+        if drive.stop:
+            out["t_threshold"] = math.nan  # the load parameter at which a stop rule held
         snap = Snapshots.open(fields, snap_name, self.ps.X, self.ps.table,
                               lambda: dict(self.body.field_state(), t=state["lam"]),
                               len(path), 1, max(1, len(path)))
@@ -338,6 +342,10 @@ class Run:
             out["wall_time"][k] = time.perf_counter() - t_start
             its_at.append((k, its))
             stop = on_record is not None and on_record(self.body, self, lam)
+            held = [r for r in drive.stop if r.holds(out[r.of][k])]
+            if held and not math.isfinite(out.get("t_threshold", 0.0)):
+                out["t_threshold"], out["threshold"] = float(lam), held[0].describe()
+            stop = stop or bool(held)
             bar.update(1)
             if snap:
                 state["lam"] = lam
@@ -419,11 +427,13 @@ class Run:
 
     def explicit(self, fields, snap_name, field_frames, t0, on_record=None,
                  default_disorder: float | None = None) -> dict:
-        """The explicit drive (module docstring). ``default_disorder``: the method's own η₉₅
-        limit (its module's ``DISORDER``: classic SPH's known failure, particle disorder, is
-        monitored by default), used where the drive gives none and every material is elastic
-        (no history): a body that can yield or fail (J2, mortar) disorders by fracturing, which
-        is its result, not a failure of the method."""
+        """The explicit drive (module docstring): the method's time loop in chunks between the
+        records (:class:`sph.records.Records`), the stop rules checked after each record
+        (:mod:`sph.stopping`). ``default_disorder``: the method's own η₉₅ limit (its module's
+        ``DISORDER``: classic SPH's known failure, particle disorder, is monitored by default),
+        used where the drive gives none and every material is elastic (no history): a body that
+        can yield or fail (J2, mortar) disorders by fracturing, which is its result, not a
+        failure of the method."""
         drive = self.model.drive
         if (drive.disorder is None and default_disorder is not None
                 and self.ps.table.n_history == 0):
@@ -433,85 +443,24 @@ class Run:
         n_steps = int(math.ceil(drive.t_end / dt))
         every = max(1, n_steps // drive.n_out)  # steps between records
         chunk = min(every, MAX_CHUNK_VARYING) if self.varying else every
-        dis = None
-        if drive.disorder is not None and math.isfinite(drive.disorder):
-            mask = None
-            if drive.disorder_set is not None:
-                mask = np.zeros(ps.n, bool)
-                mask[ps.sets[drive.disorder_set]] = True
-            dis = Disorder(ps.X, ps.dx, body=ps.body if len(ps.body_names) > 1 else None, mask=mask)
         snap = Snapshots.open(fields, snap_name, ps.X, ps.table, body.field_state, n_steps, chunk,
                               field_frames)
-        names = [o.name for o in self.model.observables if not isinstance(o, M.Period)]
-        rec = {n: [] for n in names}
-        times, kes, ses, bal, dh, mom, wes = [], [], [], [], [], [], []
-        diag, dis_e = {}, {}
-        w_ext = 0.0  # work of the dead loads and of the constraints (prescribed motion)
         from .method import ParticleBody
 
         tracked = (extra is not None or type(body).advance is ParticleBody.advance
                    or body.impulse_in_loop)
         fx = self.fixed
         m_dof = np.broadcast_to(body.m[:, None], fx.shape)
-        r_imp = np.zeros_like(ps.X)  # impulse of the constraint forces since the last record
-        r_time = [0.0]
-        need_state = any(isinstance(o, (M.MeanStress, M.FailedFraction))
-                         for o in self.model.observables)
-
-        def record():
-            fc, ce = None, 0.0
-            if contact is not None:
-                from .contact import contact_forces
-
-                fc, ce = contact_forces(body.x, ps.body, *contact)
-            # the force on each particle whose negative the constraints exert: the mean over the
-            # interval since the last record (the state's own force at t = 0)
-            force = (-r_imp / r_time[0] if r_time[0] > 0 else body.acc * body.m[:, None])
-            state = body.field_state() if need_state else None
-            for n, v in self.observe(body.x, force, state, fc).items():
-                rec[n].append(v)
-            r_imp[:] = 0.0
-            r_time[0] = 0.0
-            ke, se = body.energies()
-            se += ce
-            times.append(body.t)
-            # the method's diagnostics (a sparse product or two) on ≤ ~50 records, carried forward
-            # between them: at every record they cost 5 % of the plate's time loop
-            fresh = (len(times) - 1) % every_diag == 0 or body.steps >= n_steps or not diag
-            for n, v in (body.diagnostics() if fresh else {k: d[-1] for k, d in diag.items()}).items():
-                diag.setdefault(n, []).append(v)
-            lost = body.dissipated()
-            for n, v in lost.items():
-                dis_e.setdefault(n, []).append(v)
-            kes.append(ke)
-            ses.append(se)
-            wes.append(w_ext)
-            bal.append(ke + se + sum(lost.values()) - w_ext)
-            mom.append(linear_momentum(body.m, body.v))
-            if on_record is not None:
-                on_record(body, self, body.t)
-
-        every_diag = max(1, drive.n_out // 50)
-        record()
-        scale0 = abs(kes[0] + ses[0])
-        e_scale = scale0
-        growth = None
-        if drive.energy_growth is not None:
-            growth = EnergyGrowth(energy_floor(float(np.sum(body.m)), body.wave_speed()),
-                                  drive.energy_growth, scale0)
-            growth.update(0, bal[0], kes[0] + ses[0])
-        if dis is not None:
-            dh.append(dis(body.x)[0])
+        records = Records(self, n_steps, drive.n_out, contact)
+        records.take(on_record)
+        rules = explicit_rules(self, drive, body, records)
         if snap:
             snap(0)
         status, criterion = "ok", "none"
-        t_cut = None  # time of the first record at which drive.separate's sets are cut apart
-        at_cut = None  # the state then (cut_state)
         t_loop = 0.0
         first = None  # (time, steps) of the first chunk: JIT compilation happens there
         bar = progress.bar(n_steps, snap_name, unit="step", delay=2.0, leave=False)
         t_setup = time.perf_counter() - t0
-        every_dis = max(1, drive.n_out // 50)
         next_record = every
         while body.steps < n_steps:
             k = min(chunk, n_steps - body.steps)
@@ -525,8 +474,8 @@ class Run:
             x_before = body.x.copy()
             # a change of the prescribed velocity: the constraint's impulse m Δv and work Δ(½ m v²)
             dv = np.where(fx, v_fix - body.v, 0.0)
-            r_imp += m_dof * dv
-            w_ext += 0.5 * float(np.sum(m_dof * dv * (v_fix + body.v)))
+            records.impulse += m_dof * dv
+            records.w_ext += 0.5 * float(np.sum(m_dof * dv * (v_fix + body.v)))
             f_before = body.acc * body.m[:, None]
             body.impulse[:] = 0.0
             tl0 = time.perf_counter()
@@ -534,14 +483,14 @@ class Run:
             t_loop += time.perf_counter() - tl0
             first = first or (t_loop, done)
             bar.update(done)
-            w_ext += float(np.sum(f_new * (body.x - x_before)))
+            records.w_ext += float(np.sum(f_new * (body.x - x_before)))
             # the constraints: r = −f on a DOF moving at v_fix, work −v_fix · ∫ f dt
             imp = (body.impulse if tracked else
                    0.5 * done * dt * (f_before + body.acc * body.m[:, None]))
             imp = np.where(fx, imp, 0.0)
-            w_ext -= float(np.sum(v_fix * imp))
-            r_imp -= imp
-            r_time[0] += done * dt
+            records.w_ext -= float(np.sum(v_fix * imp))
+            records.impulse -= imp
+            records.span += done * dt
             f_ext = f_new
             if done < k or not np.isfinite(body.x).all():
                 criterion = "non-finite"
@@ -553,51 +502,30 @@ class Run:
             if body.steps < min(next_record, n_steps):
                 continue  # loads varying in time: chunks shorter than the interval of records
             next_record = (body.steps // every + 1) * every
-            record()
-            if growth is not None:
-                e_scale = max(e_scale, abs(kes[-1] + ses[-1]))
-                grew, change, rate = growth.update(body.steps, bal[-1], kes[-1] + ses[-1])
-                if grew:
-                    criterion = "energy"
-                    status = (f"unstable: energy balance grew by {change:+.3g} of the energy scale, "
-                              f"exponentially ({rate:.3g} per step), at t={body.t:.4g} s")
+            records.take(on_record)
+            fired = None
+            for rule in ordered(rules):
+                fired = rule.check(body, records)
+                if fired is not None:
                     break
-            if drive.separate is not None:
-                if t_cut is None and self.separated(*drive.separate):
-                    t_cut = body.t
-                    at_cut = self.cut_state(dis_e)
-                if t_cut is not None and body.t >= t_cut + drive.after * (1 - 1e-9):
-                    criterion = "separated"
-                    break
-            if dis is not None:
-                d95 = dis(body.x)[0] if (len(times) - 1) % every_dis == 0 or body.steps >= n_steps else dh[-1]
-                dh.append(d95)
-                if d95 > drive.disorder:
-                    criterion = "disorder"
-                    status = (f"unstable: particle disorder eta95 = {d95:.3g} > {drive.disorder} "
-                              f"at t={body.t:.4g} s")
-                    break
+            if fired is not None:
+                criterion, status = fired
+                break
         bar.close()
         if snap:
             snap(body.steps, final=True)
-        t = np.asarray(times)
         jit = jit_estimate(*first, t_loop - first[0], body.steps - first[1]) if first else 0.0
-        out = dict(time=t, status=status, criterion=criterion, dt=dt, steps=int(body.steps),
-                   t_separated=math.nan if t_cut is None else float(t_cut), at_separation=at_cut,
+        out = dict(records.arrays(), status=status, criterion=criterion, dt=dt,
+                   steps=int(body.steps),
                    wall_time=t_loop - jit, jit_time=jit, loop_time=t_loop, setup_time=t_setup,
                    n_particles=int(ps.n),
-                   kinetic_energy=np.asarray(kes), strain_energy=np.asarray(ses),
-                   energy_history=np.asarray(bal), external_work=np.asarray(wes),
-                   linear_momentum=np.asarray(mom),
                    # the loop's own rate: JIT compilation left out, as from wall_time
                    particle_steps_per_second=(ps.n * body.steps / (t_loop - jit)
                                               if t_loop - jit > 0 else math.nan))
-        for n in names:
-            out[n] = np.asarray(rec[n])
-        for n, v in diag.items():
-            out[n] = np.asarray(v)
-        for n, v in dis_e.items():
-            out[n] = np.asarray(v)
+        for rule in ordered(rules):
+            rule.report(out, status)
+        out.setdefault("t_separated", math.nan)
+        out.setdefault("at_separation", None)
         # the final state: reference and current positions, regions, and the failed particles
         state = body.field_state()
         out.update(X=ps.X.copy(), x=body.x.copy(), v=body.v.copy(), region=ps.region.copy(),
@@ -609,31 +537,26 @@ class Run:
         parts = body.components()
         if parts is not None:
             out["component"] = np.asarray(parts)
-        e = np.asarray(bal)
-        drift = float((e[-1] - e[0]) / e_scale) if e_scale > 0 else math.nan
-        if drive.energy_growth is None:
-            drift = math.nan
-        out["energy_drift"] = drift
-        out["dissipated"] = max(0.0, -drift) if math.isfinite(drift) else math.nan
-        tol = drive.energy_growth if drive.energy_growth is not None else math.inf
-        out["note"] = (f"dissipated {100 * out['dissipated']:.3g} % of the initial energy"
-                       if status == "ok" and out["dissipated"] > tol else "")
-        periods = [o for o in self.model.observables if isinstance(o, M.Period)]
-        size = float(np.abs(ps.X).max())  # u = x − X carries the round-off of x: the scale
-        for o in periods:
+        rules["energy"].finish(out, records.balance, status)
+        self._periods(out, status)
+        if "disorder" in rules:
+            rules["disorder"].finish(out, body, status)
+        return out
+
+    def _periods(self, out: dict, status: str) -> None:
+        """Each :class:`~workbench.scenes.model.Period` of the model, from the recorded history
+        of its displacement (:func:`workbench.oscillation.measure_period`; NaN with the reason in
+        ``<name>_status`` where the run is not ok or does not oscillate)."""
+        size = float(np.abs(self.ps.X).max())  # u = x − X carries the round-off of x: the scale
+        for o in self.model.observables:
+            if not isinstance(o, M.Period):
+                continue
             m = dict(period=math.nan, amplitude=math.nan, status=f"no oscillation: the run is {status}")
             if status == "ok":
-                m = measure_period(t, out[o.of], size)
+                m = measure_period(out["time"], out[o.of], size)
             out[o.name] = m["period"]
             out[f"{o.name}_amplitude"] = m["amplitude"]
             out[f"{o.name}_status"] = m["status"]
-        if dis is not None:
-            ok_x = np.isfinite(body.x).all()
-            d95, dmax = dis(body.x) if ok_x else (math.nan, math.nan)
-            out.update(stable=status == "ok", disorder=d95, disorder_max=dmax,
-                       min_spacing=dis.min_spacing(body.x) if ok_x else math.nan,
-                       disorder_history=np.asarray(dh), x=body.x.copy(), X=ps.X.copy())
-        return out
 
     def cut_state(self, dissipated: dict) -> dict:
         """What a study measures of a crack when it has just cut the body (``at_separation``):

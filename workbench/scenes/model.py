@@ -17,7 +17,9 @@ A model holds
   :class:`BodyForce`, :class:`InitialVelocity`), each on a named set and scaled by a function of
   time (explicit drive) or of the load parameter (static drive);
 - a **drive**: :class:`Static` (load steps along a path of the load parameter), :class:`Modal`,
-  :class:`Explicit` (to an end time with a time-step factor);
+  :class:`Explicit` (to an end time with a time-step factor), with **stop rules**
+  (:class:`Threshold` on an observable; the explicit drive's own energy, disorder and separation
+  rules);
 - **observables**: :class:`Displacement` of a probe or a set, :class:`Position`,
   :class:`Reaction` on a set, :class:`MeanStress`, :class:`FailedFraction` per region,
   :class:`Period` of a displacement history; explicit runs always record the energies (kinetic,
@@ -246,11 +248,13 @@ class Static:
     """Equilibrium at each value of the load parameter along ``path`` (loads and prescribed
     displacements are functions of it), reached by Newton from the previous one, the increment
     halved on failure. ``parameter`` and ``units`` name it in the results (e.g. the
-    dimensionless load, or the logarithmic strain)."""
+    dimensionless load, or the logarithmic strain). ``stop``: :class:`Threshold` rules; the path
+    ends at the first value where one holds (the later values are not run)."""
 
     path: tuple
     parameter: str = "load"
     units: str = "-"
+    stop: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -276,7 +280,9 @@ class Explicit:
     :mod:`sph.spectrum`). ``separate`` (two set names) with ``after`` (s): the run stops ``after``
     seconds past the first record at which no chain of intact particles joins the two sets (a
     crack has cut the body between them; the method's ``components``), ``t_end`` then the
-    longest it may run (``after`` = inf: to ``t_end``, the time and state of the cut recorded)."""
+    longest it may run (``after`` = inf: to ``t_end``, the time and state of the cut recorded).
+    ``stop``: :class:`Threshold` rules on the observables; the run ends ``after`` seconds past
+    the first record at which one holds."""
 
     t_end: float
     dt_factor: float = 0.3
@@ -288,6 +294,33 @@ class Explicit:
     dt_reference: str = "cfl"
     separate: tuple[str, str] | None = None
     after: float = 0.0
+    stop: tuple = ()
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """A stop rule of a drive (``Explicit(stop=...)``, ``Static(stop=...)``): the run ends when
+    the observable named ``of`` is above ``above`` or below ``below`` (give one) — at the first
+    such value of a static path, ``after`` seconds past the first such record of an explicit
+    run (``after`` = inf: to ``t_end``, the time of the crossing recorded). Every method reads
+    it the same way (:mod:`sph.stopping`, :mod:`fem_reference.model`): status ``ok``, criterion
+    ``threshold``, the time (or load parameter) of the crossing in ``t_threshold``. For
+    example ``Threshold("tip", below=-1e-3)`` ends a run once the tip has moved 1 mm down."""
+
+    of: str
+    above: float | None = None
+    below: float | None = None
+    after: float = 0.0
+
+    def holds(self, value: float) -> bool:
+        """Whether ``value`` has crossed the threshold (a NaN never has)."""
+        if self.above is not None and value > self.above:
+            return True
+        return self.below is not None and value < self.below
+
+    def describe(self) -> str:
+        return (f"{self.of} > {self.above:g}" if self.above is not None
+                else f"{self.of} < {self.below:g}")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -585,9 +618,27 @@ class Model:
                 raise SceneError(f"disorder: {d.disorder!r} is out of range; allowed: (0, inf] or None")
             if d.disorder_set is not None and d.disorder_set not in set_names:
                 raise SceneError(f"drive: disorder set '{d.disorder_set}' does not exist")
+        for rule in getattr(d, "stop", ()):
+            self._check_stop(rule, obs_names)
         if isinstance(d, Modal) and not (isinstance(d.n_modes, int) and d.n_modes >= 1):
             raise SceneError(f"drive: n_modes = {d.n_modes!r} is out of range; allowed: integers >= 1")
         return self
+
+    def _check_stop(self, rule, obs_names) -> None:
+        """A stop rule names an observable of the model that has a value at every record, and
+        one finite threshold; ``after`` ≥ 0 (0 on a static path: it ends where the rule holds)."""
+        if not isinstance(rule, Threshold):
+            raise SceneError(f"drive: stop rule {rule!r} is not a Threshold")
+        if rule.of not in obs_names or isinstance(self.observable(rule.of), Period):
+            raise SceneError(f"stop rule on '{rule.of}': no such observable with a value at every "
+                             f"record (observables: {_names(self.observables)})")
+        bounds = [b for b in (rule.above, rule.below) if b is not None]
+        if len(bounds) != 1 or not math.isfinite(bounds[0]):
+            raise SceneError(f"stop rule on '{rule.of}': give one finite threshold, above or below")
+        limit = (0.0, 0.0) if isinstance(self.drive, Static) else (0.0, math.inf)
+        if not (isinstance(rule.after, (int, float)) and limit[0] <= rule.after <= limit[1]):
+            raise SceneError(f"stop rule on '{rule.of}': after = {rule.after!r} s is out of range; "
+                             f"allowed: " + ("0 on a static path" if limit[1] == 0 else "[0, inf] s"))
 
     def describe(self) -> dict:
         """Dataset attributes: regions with their materials, sets, constraints, loads, drive."""
