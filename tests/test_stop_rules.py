@@ -97,6 +97,6 @@ def test_the_explicit_loop_and_its_stop_rules_live_apart():
     import inspect
 
     src = inspect.getsource(driver.Run.explicit)
-    assert len(src.splitlines()) <= 130, len(src.splitlines())
+    assert len(src.splitlines()) <= 125, len(src.splitlines())
     for name in ("EnergyGrowth", "Disorder(", "separated(", "linear_momentum"):
         assert name not in src, name
