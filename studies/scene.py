@@ -108,6 +108,8 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
         scalars[p.name] = np.full(shp, np.nan)
         scalars[f"{p.name}_amplitude"] = np.full(shp, np.nan)
         notes[f"{p.name}_status"] = np.full(shp, "not run", dtype=object)
+    if getattr(drive, "stop", ()):  # where the drive's stop rules ended the run (NaN: none did)
+        scalars["t_threshold"] = np.full(shp, np.nan)
     for i, s in enumerate(solvers):
         for r in ladders[s]:
             j = all_res.index(r)
@@ -144,7 +146,10 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
                           {"units": "s" if name == "period" else "J" if model.dim == 3 else "J/m",
                            "long_name": ENERGY_NAMES.get(name, name)})
     for name, arr in scalars.items():
-        data[name] = (dims, arr, {"units": "m" if name.endswith("amplitude") else "s"})
+        unit = "m" if name.endswith("amplitude") else "s"
+        if name == "t_threshold" and isinstance(drive, M.Static):
+            unit = drive.units  # a static path stops at a value of its load parameter
+        data[name] = (dims, arr, {"units": unit})
     for name, arr in notes.items():
         data[name] = (dims, arr.astype(str), {"units": "-", "long_name": "'ok', or why there is no period"})
     ds = xr.Dataset(data, coords={"solver": solvers, "resolution": all_res,
@@ -157,8 +162,8 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
 
 def _summary(statuses) -> str:
     statuses = [str(s) for s in statuses]
-    return "ok" if all(s.startswith("ok") for s in statuses) else next(
-        s for s in statuses if not s.startswith("ok"))
+    return "ok" if all(results.path_ok(s) for s in statuses) else next(
+        s for s in statuses if not results.path_ok(s))
 
 
 def gates(ds) -> list:
