@@ -352,3 +352,44 @@ def test_microcantilever_3d_static_slope_gates_fail_a_threefold_recorded_error(r
     tol = _tolerance(5, 8778.3 / 8324.1 - 1, r)
     assert recorded <= tol
     assert not Gate.at_most("slope", recorded, tol, "r", "ref").regressed(3.0).passed, (r, tol)
+
+
+# -- every gate names its reference; the project's packages are imported, never skipped ----------
+
+def _gate_calls():
+    """(file, line, reference node) of each Gate.at_most / at_least / expect / missing call in
+    the study modules (their source, so the gates of the full runs are covered too)."""
+    import ast
+    from pathlib import Path
+
+    for path in sorted(Path(studies.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id == "Gate"
+                    and node.func.attr in ("at_most", "at_least", "expect", "missing")):
+                ref = node.args[4] if len(node.args) >= 5 else next(
+                    (k.value for k in node.keywords if k.arg == "reference"), None)
+                yield path.name, node.lineno, ref
+
+
+def test_every_gate_of_every_study_names_its_reference():
+    """Each gate, of the quick and the full runs alike, is given the text saying what it is
+    compared against and why that is independent of what it checks (an empty literal fails)."""
+    import ast
+
+    calls = list(_gate_calls())
+    assert len(calls) > 30
+    for name, line, ref in calls:
+        assert ref is not None, f"{name}:{line}: a gate without a reference"
+        assert not (isinstance(ref, ast.Constant) and not ref.value), f"{name}:{line}: empty"
+
+
+def test_no_importorskip_of_the_projects_own_packages():
+    """A broken import of the project's own code fails its tests; it never turns them into skips."""
+    import re
+    from pathlib import Path
+
+    own = r"(app|fem_reference|sph|studies|workbench)\b"
+    for path in Path(__file__).parent.glob("*.py"):
+        hits = re.findall(r"importorskip\(\s*['\"]" + own, path.read_text())
+        assert not hits, f"{path.name}: importorskip of {hits}"

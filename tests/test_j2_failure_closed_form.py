@@ -180,3 +180,17 @@ def test_band_value_gate_on_the_recorded_run(case):
     tripled = closed * (1 + 3 * (G / closed - 1))  # the same errors, three times
     assert not band_value_gate(case, BAND_LADDER, tripled, closed, b).passed
     assert not band_value_gate(case, BAND_LADDER, np.append(G[:2], np.nan), closed, b).passed
+
+
+def test_closed_form_from_a_dataset_s_scene_parameters():
+    """The study's dataset carries the scene as param_* attributes (numpy scalars, as read back
+    from netCDF): the closed form built from them is the scene's."""
+    from studies.crack_band import microcantilever_band_closed_form
+    from workbench.results import provenance
+
+    attrs = {k: (np.float64(v) if isinstance(v, float) else np.int64(v) if isinstance(v, int)
+                 and not isinstance(v, bool) else v)
+             for k, v in provenance("microcantilever", SCENE).items()}
+    for case, mat in BAND_MATERIAL.items():
+        assert microcantilever_band_closed_form(attrs, case, 1e-6) == pytest.approx(
+            analytic.crack_band_energy(mat, SCENE.eps_L_low, 1e-6, SCENE.H), rel=1e-14)
