@@ -80,8 +80,8 @@ CONSISTENT = ("csph", "hpm_vc")
 # bulk's 0.04 % at 10 predicts 0.0025 %, the corners' term falls alike: 0.005 % at most. Finite
 # amplitude: the period of the 0.12 L oscillation lies below the linear (modal) one; the FEM's
 # dynamic runs measure it apart from csph — dynamic/modal − 1 at 4 across H is +0.044 % at 100
-# Newmark steps per period and −0.019 % at 400, so −0.023 % with Newmark's O(Δt²) elongation
-# extrapolated away (csph's own dynamic/modal − 1: −0.013 … −0.016 % on 5 … 40). Together 0.028 %:
+# Newmark steps per period and −0.019 % at 400 (−0.018 % at 8 across H: mesh-independent), so
+# −0.023 % with Newmark's O(Δt²) elongation extrapolated away (csph's own dynamic/modal − 1: −0.013 … −0.016 % on 5 … 40). Together 0.028 %:
 # 3e-4. (Was 2e-4 — "the finite amplitude's ~0.015 %" with the discretisation's 0.0025 % — which
 # the recorded −0.0192 % passed only barely; before that 5e-4, issue 10's target, 8 times the error
 # it predicted. A tripled 0.058 % fails.)

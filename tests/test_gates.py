@@ -158,30 +158,68 @@ def test_plate_nan_at_the_finest_fails_its_gate():
 
 
 # The recorded full plate run (`workbench run plate`, 2 shared cores): the FEM's modal periods at
-# 2, 4, 8, 16 elements across H; csph's dynamic periods (the study's) and modal periods (the
-# linearised eigenproblem, driver.solve(..., drive=Modal(1))) at H/Δx = 5, 10, 20, 40, s.
+# 2, 4, 8, 16 elements across H (its dynamic run at 8: amplitude); csph's dynamic periods (the
+# study's) and modal periods (the linearised eigenproblem, driver.solve(..., drive=Modal(1))) at
+# H/Δx = 5, 10, 20, 40; hpm and hpm_vc at 10; periods s, amplitudes m, energy drifts.
 FEM_MODAL = (0.25438521, 0.25499238, 0.25520061, 0.2552773)
+FEM_AMPLITUDE_8 = 0.0229703917
 CSPH_DYNAMIC = (0.25631088, 0.25534929, 0.255259, 0.25527305)
 CSPH_MODAL = (0.25635094, 0.25538569, 0.25529733, 0.25530503)
+AT_10 = {"csph": (0.2553492868, 0.0229723848, 8.75e-7), "hpm": (0.2597860426, 0.0233195916, 8.45e-7),
+         "hpm_vc": (0.2552035162, 0.0229624265, 5.17e-7)}
+FULL_PLATE_SLIPS = {
+    "plate csph at H/dx = 10: period vs FEM modal period":
+        "its dynamic period carries two terms of opposite sign: the discretisation's +0.025 % (its "
+        "modal period) and the finite amplitude's −0.014 %; they leave +0.011 %, and a tolerance "
+        "at three times that would sit below the bulk term alone (0.04 %), the error the method "
+        "should have",
+    "plate csph at H/dx = 10: amplitude vs FEM dynamic amplitude":
+        "the tolerance carries the period's error into A = V/omega and adds the FEM's own; the "
+        "amplitudes agree far closer (+0.009 %) than that model says, and no derivation of their "
+        "own error is at hand",
+    "plate hpm_vc at H/dx = 10: amplitude vs FEM dynamic amplitude":
+        "as csph's: +0.035 % against a model of 0.11 %",
+}
+"""Gates of the recorded full plate run whose tripled error still passes, each with why (the set
+must be exactly this)."""
 
 
 def recorded_plate_dataset():
-    """The recorded full run's periods in a plate dataset (studies.plate.run's shape; the other
-    solvers and the amplitude gates' values as in plate_dataset)."""
+    """The recorded full run in a plate dataset (studies.plate.run's shape)."""
     from studies import plate
 
-    _, ds = plate_dataset(res=(2, 4, 5, 8, 10, 16, 20, 40))
+    res = [2, 4, 5, 8, 10, 16, 20, 40]
+    _, ds = plate_dataset(res=tuple(res))
     ds = ds.copy(deep=True)
-    fem = np.full(8, np.nan)
-    fem[[0, 1, 3, 5]] = FEM_MODAL
-    csph, modal = np.full(8, np.nan), np.full(8, np.nan)
-    csph[[2, 4, 6, 7]], modal[[2, 4, 6, 7]] = CSPH_DYNAMIC, CSPH_MODAL
-    ds.period.loc["fem"], ds.period.loc["csph"] = fem, csph
-    ds.modal_period.loc["csph"] = modal
-    for s, v in (("fem", fem), ("csph", csph)):
-        ds.status.loc[s] = np.where(np.isfinite(v), "ok", "not run")
-    ds["fem_modal_converged"] = ((), plate._extrapolated(fem, ds.resolution.values))
+    for v in ("period", "amplitude", "energy_drift", "modal_period"):
+        ds[v][:] = np.nan
+    ds.status[:] = "not run"
+    ds.period.loc["analytic"] = ds.attrs["analytic_period"]
+    ds.status.loc["analytic"] = "ok"
+    ds.period.loc["fem", [2, 4, 8, 16]] = np.array(FEM_MODAL)
+    ds.amplitude.loc["fem", 8] = FEM_AMPLITUDE_8
+    ds.status.loc["fem", [2, 4, 8, 16]] = "ok"
+    ds.period.loc["csph", [5, 10, 20, 40]] = np.array(CSPH_DYNAMIC)
+    ds.modal_period.loc["csph", [5, 10, 20, 40]] = np.array(CSPH_MODAL)
+    ds.status.loc["csph", [5, 10, 20, 40]] = "ok"
+    for s, (T, A, d) in AT_10.items():
+        ds.period.loc[s, 10], ds.amplitude.loc[s, 10], ds.energy_drift.loc[s, 10] = T, A, d
+        ds.status.loc[s, 10] = "ok"
+    ds.amplitude.loc["csph", 10], ds.energy_drift.loc["csph", 10] = AT_10["csph"][1:]
+    ds["fem_modal_converged"] = ((), plate._extrapolated(ds.period.sel(solver="fem").values,
+                                                          ds.resolution.values))
     return plate, ds
+
+
+def test_every_gate_of_the_recorded_full_plate_run_fails_a_threefold_regression():
+    """All of the full run's gates (N_GATES) pass on its recorded values; each fails its
+    regression but those of FULL_PLATE_SLIPS, named with why."""
+    plate, ds = recorded_plate_dataset()
+    gates = plate.gates(ds)
+    assert len(gates) == plate.N_GATES[False]
+    assert all(g.passed for g in gates), [g.line() for g in gates if not g.passed]
+    slipped = {g.name for g in gates if g.regressed(3.0).passed}
+    assert slipped == set(FULL_PLATE_SLIPS), slipped
 
 
 def test_plate_gates_on_the_recorded_full_run():
@@ -296,19 +334,21 @@ def test_stability_crashed_run_is_not_an_expected_instability():
 # -- the gates of the full runs, on their recorded errors ----------------------------------------
 # The quick run holds a part of the gates; the full runs (too slow for the tests) hold the rest.
 # For those the errors the README and the study modules record are fed three-fold to the study's
-# own tolerance. Where a tripled recorded error still passes, the tolerance is the method's expected
-# error and the recorded error lies far below it (a cancellation the derivation cannot promise):
-# marked, strict, so that the list stays the true one (issue 42's note names each).
-SLIPS = pytest.mark.xfail(strict=True, reason="recorded error far below the method's expected error")
+# own tolerance (the plate's whole full run: test_every_gate_of_the_recorded_full_plate_run_...).
+# Where a tripled recorded error still passes, the tolerance is the method's expected error and
+# the recorded error lies far below it (a cancellation the derivation cannot promise): marked,
+# strict, with why, so that the list stays the true one (issue 42's note names each).
 RECORDED = [
-    ("plate", "TOL_PERIOD_CONSISTENT", 3.05e-4, "csph at H/dx = 10, dynamic (issue 42)"),
     ("plate", "TOL_PERIOD_CONSISTENT", 3e-4, "hpm_vc at H/dx = 10, modal (README)"),
-    ("plate", "TOL_PERIOD_FINE", 1.92e-4, "csph at H/dx = 40, dynamic (the full run)"),
-    ("plate", "TOL_PERIOD", 1.8e-2, "hpm at H/dx = 10 (README)"),
     ("plate", "TOL_FEM_THIN_PLATE", 4.7e-3, "FEM at 16 across H (notes.md: 0.2553 s)"),
     ("cantilever", "TOL_CONSISTENT_FEM", 1.0e-3, "csph at H/dx = 10, largest load (README)"),
     pytest.param("cantilever", "TOL_CONSISTENT_FEM", 3e-4, "hpm_vc at H/dx = 10 (README)",
-                 marks=SLIPS),
+                 marks=pytest.mark.xfail(strict=True, reason=(
+                     "cannot be tightened: the expected error at H/dx = 10 is the bulk's O(dx^2) "
+                     "term (2 x 0.04 %, the free-free beam) plus the clamp's corner term of about "
+                     "that size and of either sign; hpm_vc's +0.03 % is their near-cancellation, "
+                     "and a tolerance catching its tripled 0.09 % would lie below the bulk term "
+                     "plus the corner's (0.16 %), the error the method should have"))),
     ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
     ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
     ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam.py)"),
@@ -339,57 +379,20 @@ def test_exactness_gates_of_the_full_run_catch_their_defect():
         assert not Gate.at_most("x", 0.0, tol, "r", "ref", defect=defect).regressed().passed, tol
 
 
-@pytest.mark.parametrize("r,recorded", [
-    (5, 5.69e-2), (10, 1.86e-2),
-    pytest.param(15, 8.6e-3, marks=SLIPS)])
+@pytest.mark.parametrize("r,recorded", [(5, 5.69e-2), (10, 1.86e-2), (15, 8.6e-3)])
 def test_microcantilever_3d_static_slope_gates_fail_a_threefold_recorded_error(r, recorded):
     """The default 3-D run's static csph slopes (README: +5.69, +1.86, +0.86 % at H/Δx = 5, 10,
-    15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against their
-    tolerance max(1 %, e_FEM(5)(10/r)^p). At 15 the error model asks 3.5 % and csph is at 0.86 %:
-    a tripled error passes (the finest's own 1 % gate, TOL_SLOPE, fails it)."""
-    from studies.microcantilever import _tolerance
+    15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against the gates
+    that read them: each rung's max(1 %, e_FEM(5)(10/r)^p) and, at the finest (15), the issue's
+    1 % (TOL_SLOPE, finest_slope_gates). A tripled error fails one of them at least: at 5 and 10
+    the rung's own; at 15 the rung's error model asks 3.5 % — csph lies 4 times below the FEM's
+    error at the same nodal spacing, a margin the model cannot promise, so the rung's tolerance
+    stays the model's — and the finest's 1 % fails the tripled 2.6 %."""
+    from studies.microcantilever import STATIC_RESOLUTIONS_3D, TOL_SLOPE, _tolerance
 
-    tol = _tolerance(5, 8778.3 / 8324.1 - 1, r)
-    assert recorded <= tol
-    assert not Gate.at_most("slope", recorded, tol, "r", "ref").regressed(3.0).passed, (r, tol)
-
-
-# -- every gate names its reference; the project's packages are imported, never skipped ----------
-
-def _gate_calls():
-    """(file, line, reference node) of each Gate.at_most / at_least / expect / missing call in
-    the study modules (their source, so the gates of the full runs are covered too)."""
-    import ast
-    from pathlib import Path
-
-    for path in sorted(Path(studies.__file__).parent.glob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                    and isinstance(node.func.value, ast.Name) and node.func.value.id == "Gate"
-                    and node.func.attr in ("at_most", "at_least", "expect", "missing")):
-                ref = node.args[4] if len(node.args) >= 5 else next(
-                    (k.value for k in node.keywords if k.arg == "reference"), None)
-                yield path.name, node.lineno, ref
-
-
-def test_every_gate_of_every_study_names_its_reference():
-    """Each gate, of the quick and the full runs alike, is given the text saying what it is
-    compared against and why that is independent of what it checks (an empty literal fails)."""
-    import ast
-
-    calls = list(_gate_calls())
-    assert len(calls) > 30
-    for name, line, ref in calls:
-        assert ref is not None, f"{name}:{line}: a gate without a reference"
-        assert not (isinstance(ref, ast.Constant) and not ref.value), f"{name}:{line}: empty"
-
-
-def test_no_importorskip_of_the_projects_own_packages():
-    """A broken import of the project's own code fails its tests; it never turns them into skips."""
-    import re
-    from pathlib import Path
-
-    own = r"(app|fem_reference|sph|studies|workbench)\b"
-    for path in Path(__file__).parent.glob("*.py"):
-        hits = re.findall(r"importorskip\(\s*['\"]" + own, path.read_text())
-        assert not hits, f"{path.name}: importorskip of {hits}"
+    tols = [_tolerance(5, 8778.3 / 8324.1 - 1, r)]
+    if r == max(STATIC_RESOLUTIONS_3D):
+        tols.append(TOL_SLOPE)
+    assert all(recorded <= t for t in tols)
+    assert any(not Gate.at_most("slope", recorded, t, "r", "ref").regressed(3.0).passed
+               for t in tols), (r, tols)
