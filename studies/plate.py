@@ -16,6 +16,7 @@ import xarray as xr
 from workbench import analytic, results
 from workbench.oscillation import with_period_notes
 from workbench.scenes import Plate
+from workbench.scenes.model import Modal
 
 from .common import Gate, field_options, field_series, observed_order, planned, validate
 from .common import ladders as study_ladders
@@ -74,13 +75,32 @@ TOL_PERIOD_CONSISTENT = 6e-4
 # at 4 across H, whose own error is 0.12 %.)
 TOL_AMPLITUDE_CONSISTENT = 6e-4
 CONSISTENT = ("csph", "hpm_vc")
-# csph at H/Δx = 40 (full ladder): second order from the bulk's 0.04 % at 10 predicts 0.0025 %, the
-# corners' term falls alike (modal −0.007 % at 40), and the finite amplitude's ~0.015 % shift
-# against the modal reference remains: 0.02 %. (Was 5e-4, issue 10's target: 8 times the error it
-# predicted.)
-TOL_PERIOD_FINE = 2e-4
-# Observed order over 5 … 40 at least 1.5 (second order expected; nodal integration ~1).
+# csph at H/Δx = 40 (full ladder), its dynamic period against the FEM's modal limit. The expected
+# error is the discretisation's plus the finite amplitude's. Discretisation: second order from the
+# bulk's 0.04 % at 10 predicts 0.0025 %, the corners' term falls alike: 0.005 % at most. Finite
+# amplitude: the period of the 0.12 L oscillation lies below the linear (modal) one; the FEM's
+# dynamic runs measure it apart from csph — dynamic/modal − 1 at 4 across H is +0.044 % at 100
+# Newmark steps per period and −0.019 % at 400 (−0.018 % at 8 across H: mesh-independent), so
+# −0.023 % with Newmark's O(Δt²) elongation extrapolated away (csph's own dynamic/modal − 1: −0.013 … −0.016 % on 5 … 40). Together 0.028 %:
+# 3e-4. (Was 2e-4 — "the finite amplitude's ~0.015 %" with the discretisation's 0.0025 % — which
+# the recorded −0.0192 % passed only barely; before that 5e-4, issue 10's target, 8 times the error
+# it predicted. A tripled 0.058 % fails.)
+TOL_PERIOD_FINE = 3e-4
+# Observed order of csph's period error over its ladder (5 … 40), on the MODAL periods (the
+# linearised eigenperiod, ``modal_period``) against the FEM's modal limit: the reference and the
+# computed value are then the same quantity (the continuum's linear period), by independent
+# discretisations. The dynamic periods carry the finite amplitude's shift (−0.013 … −0.016 % in
+# csph, −0.023 % in the FEM), which no mesh refinement removes: against the modal limit their
+# error tends to that shift, not to zero, and the fitted order to 0 (recorded full run: +0.387,
+# +0.011, −0.025, −0.019 % on 5 … 40: order 1.18, a false failure). Against a dynamic limit the
+# finest two errors (−0.002, +0.004 %) fall below the shift's own uncertainty (the FEM's −0.023 %
+# and csph's −0.013 … −0.016 % differ by 0.008 %): no order can be read from them. The modal errors (recorded: +0.403, +0.025, −0.0097, −0.0067 %)
+# give 1.91. At least 1.5: second order in the bulk, the clamped corners' singular term slower (the
+# FEM's own modal order is 1.4–1.6); nodal integration converges at ~1.
 MIN_ORDER = 1.5
+MODAL_RUNGS = 3
+"""csph's modal period is computed on its ladder where that has this many rungs (the order gate's
+minimum): the full ladder; the quick one (two rungs, no order gate) runs none."""
 N_GATES = {False: 12, True: 7}
 """Gates of the default run (full, ``--quick``): the FEM against thin-plate theory; period,
 amplitude and energy drift at H/Δx = 10 of csph, hpm and hpm_vc (csph and hpm in the quick
@@ -126,7 +146,12 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
     tasks = [Task.make(s, scene, r, **({"dynamic": r == dyn} if s == "fem" else OPTIONS.get(s, {})),
                        **field_options(s, r, fields, field_runs))
              for s, lad in ladders.items() for r in lad]
-    outs = dict(zip(((t.solver, t.resolution) for t in tasks), run_tasks(tasks, scheduler, NAME)))
+    # csph's modal periods, on a ladder long enough for the order gate (its reference: the modal limit)
+    modal_tasks = [Task.make("csph", scene, r, drive=Modal(1))
+                   for r in ladders.get("csph", ()) if len(ladders["csph"]) >= MODAL_RUNGS]
+    done = run_tasks(tasks + modal_tasks, scheduler, NAME)
+    outs = dict(zip(((t.solver, t.resolution) for t in tasks), done[:len(tasks)]))
+    modal_outs = {t.resolution: o for t, o in zip(modal_tasks, done[len(tasks):])}
     for i, s in enumerate(solvers):
         if s == "analytic":
             period[i] = T0
@@ -170,6 +195,15 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
                                                   {"units": "-", "long_name": "intervals across H (spacing H/r): r + 1 particles (node lattice), r (cell), r elements"}),
                 "time": ("time", time, {"units": "s"})},
     )
+    modal = np.full(shp, np.nan)
+    modal_status = np.full(shp, "not run", dtype=object)
+    for r, o in modal_outs.items():
+        i, j = solvers.index("csph"), all_res.index(r)
+        modal[i, j] = o.get("period", np.nan)
+        modal_status[i, j] = str(o["status"])
+    ds["modal_period"] = (("solver", "resolution"), modal, {"units": "s", "long_name":
+                          "linearised (modal) period of the discrete plate (csph, full ladder)"})
+    ds["modal_status"] = (("solver", "resolution"), modal_status.astype(str), {"units": "-"})
     ds["period_nondim"] = (ds.period * scene.c0 / scene.L).assign_attrs(units="-", long_name="T c0 / L")
     ds["amplitude_nondim"] = (ds.amplitude / scene.L).assign_attrs(units="-", long_name="A / L")
     ds["fem_modal_converged"] = ((), _extrapolated(ds.period.sel(solver="fem").values, ds.resolution.values),
@@ -234,6 +268,10 @@ def orders(ds: xr.Dataset) -> dict:
                 out["fem (successive differences)"] = observed_order(h[1:], np.diff(v[keep]))
             continue
         out[s] = observed_order(h, v[keep] - ref)
+    if "modal_period" in ds and "csph" in ds.solver.values:
+        v = ds.modal_period.sel(solver="csph").values
+        keep = np.isfinite(v)
+        out["csph (modal)"] = observed_order(1.0 / ds.resolution.values[keep], v[keep] - ref)
     return out
 
 
@@ -262,6 +300,21 @@ FEM_REFERENCE = ("the FEM's modal period extrapolated to zero element size: quad
                  "scikit-fem (fem_reference), another discretisation of the same 2-D continuum that "
                  "shares no code with the particle methods but the scene and the SVK law (itself "
                  "checked against its closed-form energy, tests/test_materials.py)")
+
+
+def modal_order_gate(ds: xr.Dataset, ref: float) -> Gate:
+    """csph's observed order of the modal period's error against the FEM's modal limit ``ref``
+    over its ladder (:data:`MIN_ORDER`; why modal: the comment at it). A modal run that is missing
+    or gave NaN makes the order NaN, which fails."""
+    name = "plate csph: observed order of the (modal) period error"
+    why = "second order in the bulk; nodal integration converges at ~1"
+    if "modal_period" not in ds:
+        return Gate.missing(name, "no modal periods in the dataset", MIN_ORDER, why, FEM_REFERENCE)
+    run = planned(ds.status.sel(solver="csph").values)
+    v = ds.modal_period.sel(solver="csph").values[run]
+    order = (observed_order(1.0 / ds.resolution.values[run], (v - ref) / ref)
+             if np.all(np.isfinite(v)) else np.nan)
+    return Gate.at_least(name, order, MIN_ORDER, why, FEM_REFERENCE)
 
 
 def gates(ds: xr.Dataset) -> list[Gate]:
@@ -316,14 +369,11 @@ def gates(ds: xr.Dataset) -> list[Gate]:
         if 40 in res and run[list(res).index(40)]:
             g.append(Gate.at_most("plate csph at H/dx = 40: period vs FEM modal period",
                                   abs(v[list(res).index(40)] - ref) / ref, TOL_PERIOD_FINE,
-                                  "second order from H/dx = 10 (0.006 %) + the finite "
-                                  "amplitude's 0.015 %", FEM_REFERENCE))
-        if run.sum() >= 3:  # NaN on a planned rung: the order is NaN and the gate fails
-            g.append(Gate.at_least("plate csph: observed order of the period error",
-                                   observed_order(1.0 / res[run], v[run] - ref)
-                                   if np.all(np.isfinite(v[run])) else np.nan, MIN_ORDER,
-                                   "second-order method; nodal integration converges at ~1",
-                                   FEM_REFERENCE))
+                                  "second order from H/dx = 10 (0.005 %) + the finite "
+                                  "amplitude's shift (FEM dynamic/modal, dt -> 0: 0.023 %)",
+                                  FEM_REFERENCE))
+    if "csph" in ds.solver.values and planned(ds.status.sel(solver="csph").values).sum() >= MODAL_RUNGS:
+        g.append(modal_order_gate(ds, ref))
     return g
 
 

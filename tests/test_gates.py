@@ -27,9 +27,11 @@ def quick_gates(quick_verify):
 
 KNOWN_SLIPS = {
     "plate csph at H/dx = 10: period vs FEM modal period":
-        "the quick run's reference, the FEM extrapolated from 2, 4, 8 elements across H, lies "
-        "0.015 % above the full run's (2 to 16): csph reads +0.016 % against it, +0.0305 % against "
-        "the full one, whose tripled 0.09 % fails TOL_PERIOD_CONSISTENT (test below)",
+        "csph's dynamic period carries the discretisation's +0.025 % (its modal period) and the "
+        "finite amplitude's −0.014 %, of opposite sign; it reads +0.016 % against the quick run's "
+        "reference (the FEM from 2, 4, 8 elements across H) and +0.011 % against the full one's "
+        "(FULL_PLATE_SLIPS): a tolerance catching three times that would lie below the bulk term "
+        "alone (0.04 %), the error the method should have",
     **{f"microcantilever {case} compression H/dx=5: failed particles outside the {where}":
        "none failed outside the low eps_L's material: a count of zero, which no factor moves; the "
        "issue's 80 % is the criterion, not an error model"
@@ -98,9 +100,10 @@ def test_count_gate_fails_when_a_gate_vanished():
 
 # -- a NaN or missing run fails its gate --------------------------------------------------------
 
-def plate_dataset(res=(5, 10, 20, 40), nan_at=None):
+def plate_dataset(res=(5, 10, 20, 40), nan_at=None, nan_modal_at=None):
     """A plate dataset of the shape studies.plate.run writes, the discrete periods 0.1 % × (5/r)²
-    off the reference (second order); ``nan_at``: (solver, resolution) whose run gave NaN."""
+    off the reference (second order), csph's modal periods alike; ``nan_at``: (solver,
+    resolution) whose run gave NaN; ``nan_modal_at``: the csph rung whose modal run did."""
     from studies import plate
 
     solvers = ["analytic", "fem", "csph", "hpm", "hpm_vc"]
@@ -121,18 +124,22 @@ def plate_dataset(res=(5, 10, 20, 40), nan_at=None):
         i, j = solvers.index(nan_at[0]), list(res).index(nan_at[1])
         period[i, j] = amplitude[i, j] = drift[i, j] = np.nan
         status[i, j] = "unstable: NaN at t=0.1"
+    modal = np.full(shp, np.nan)
+    modal[2] = T * (1 + 1e-4 * (5 / np.asarray(res, float)) ** 2)
+    if nan_modal_at is not None:
+        modal[2, list(res).index(nan_modal_at)] = np.nan
     dims = ("solver", "resolution")
     ds = xr.Dataset({"period": (dims, period), "amplitude": (dims, amplitude),
                      "energy_drift": (dims, drift), "status": (dims, status.astype(str)),
-                     "fem_modal_converged": ((), T)},
+                     "modal_period": (dims, modal), "fem_modal_converged": ((), T)},
                     coords={"solver": solvers, "resolution": list(res)},
                     attrs={"analytic_period": 0.2541})
     return plate, ds
 
 
 def test_plate_nan_at_the_finest_fails_its_gate():
-    """csph's H/Δx = 40 run gave NaN: the gate at 40 and the observed order are evaluated and fail
-    (the old gates left both out, and the study passed with two gates fewer)."""
+    """csph's H/Δx = 40 run gave NaN: the gate at 40 is evaluated and fails (the old gates left it
+    out); its modal run at 40 gave NaN: the observed order is evaluated and fails."""
     plate, ok = plate_dataset()
     good = plate.gates(ok)
     assert all(g.passed for g in good) and len(good) == plate.N_GATES[False], \
@@ -141,8 +148,103 @@ def test_plate_nan_at_the_finest_fails_its_gate():
     g = plate.gates(ds)
     assert len(g) == plate.N_GATES[False]
     failed = [x.name for x in g if not x.passed]
-    assert failed == ["plate csph at H/dx = 40: period vs FEM modal period",
-                      "plate csph: observed order of the period error"], failed
+    assert failed == ["plate csph at H/dx = 40: period vs FEM modal period"], failed
+    _, ds = plate_dataset(nan_modal_at=40)
+    g = plate.gates(ds)
+    assert len(g) == plate.N_GATES[False]
+    assert [x.name for x in g if not x.passed] == [
+        "plate csph: observed order of the (modal) period error"]
+    g = plate.gates(ok.drop_vars("modal_period"))  # a dataset without them: fails, says why
+    assert [x.shown for x in g if not x.passed] == [
+        "not evaluated: no modal periods in the dataset"]
+
+
+# The recorded full plate run (`workbench run plate`, 2 shared cores): the FEM's modal periods at
+# 2, 4, 8, 16 elements across H (its dynamic run at 8: amplitude); csph's dynamic periods (the
+# study's) and modal periods (the linearised eigenproblem, driver.solve(..., drive=Modal(1))) at
+# H/Δx = 5, 10, 20, 40; hpm and hpm_vc at 10; periods s, amplitudes m, energy drifts.
+FEM_MODAL = (0.25438521, 0.25499238, 0.25520061, 0.2552773)
+FEM_AMPLITUDE_8 = 0.0229703917
+CSPH_DYNAMIC = (0.25631088, 0.25534929, 0.255259, 0.25527305)
+CSPH_MODAL = (0.25635094, 0.25538569, 0.25529733, 0.25530503)
+AT_10 = {"csph": (0.2553492868, 0.0229723848, 8.75e-7), "hpm": (0.2597860426, 0.0233195916, 8.45e-7),
+         "hpm_vc": (0.2552035162, 0.0229624265, 5.17e-7)}
+FULL_PLATE_SLIPS = {
+    "plate csph at H/dx = 10: period vs FEM modal period":
+        "its dynamic period carries two terms of opposite sign: the discretisation's +0.025 % (its "
+        "modal period) and the finite amplitude's −0.014 %; they leave +0.011 %, and a tolerance "
+        "at three times that would sit below the bulk term alone (0.04 %), the error the method "
+        "should have",
+    "plate csph at H/dx = 10: amplitude vs FEM dynamic amplitude":
+        "the tolerance carries the period's error into A = V/omega and adds the FEM's own; the "
+        "amplitudes agree far closer (+0.009 %) than that model says, and no derivation of their "
+        "own error is at hand",
+    "plate hpm_vc at H/dx = 10: amplitude vs FEM dynamic amplitude":
+        "as csph's: +0.035 % against a model of 0.11 %",
+}
+"""Gates of the recorded full plate run whose tripled error still passes, each with why (the set
+must be exactly this)."""
+
+
+def recorded_plate_dataset():
+    """The recorded full run in a plate dataset (studies.plate.run's shape)."""
+    from studies import plate
+
+    res = [2, 4, 5, 8, 10, 16, 20, 40]
+    _, ds = plate_dataset(res=tuple(res))
+    ds = ds.copy(deep=True)
+    for v in ("period", "amplitude", "energy_drift", "modal_period"):
+        ds[v][:] = np.nan
+    ds.status[:] = "not run"
+    ds.period.loc["analytic"] = ds.attrs["analytic_period"]
+    ds.status.loc["analytic"] = "ok"
+    ds.period.loc["fem", [2, 4, 8, 16]] = np.array(FEM_MODAL)
+    ds.amplitude.loc["fem", 8] = FEM_AMPLITUDE_8
+    ds.status.loc["fem", [2, 4, 8, 16]] = "ok"
+    ds.period.loc["csph", [5, 10, 20, 40]] = np.array(CSPH_DYNAMIC)
+    ds.modal_period.loc["csph", [5, 10, 20, 40]] = np.array(CSPH_MODAL)
+    ds.status.loc["csph", [5, 10, 20, 40]] = "ok"
+    for s, (T, A, d) in AT_10.items():
+        ds.period.loc[s, 10], ds.amplitude.loc[s, 10], ds.energy_drift.loc[s, 10] = T, A, d
+        ds.status.loc[s, 10] = "ok"
+    ds.amplitude.loc["csph", 10], ds.energy_drift.loc["csph", 10] = AT_10["csph"][1:]
+    ds["fem_modal_converged"] = ((), plate._extrapolated(ds.period.sel(solver="fem").values,
+                                                          ds.resolution.values))
+    return plate, ds
+
+
+def test_every_gate_of_the_recorded_full_plate_run_fails_a_threefold_regression():
+    """All of the full run's gates (N_GATES) pass on its recorded values; each fails its
+    regression but those of FULL_PLATE_SLIPS, named with why."""
+    plate, ds = recorded_plate_dataset()
+    gates = plate.gates(ds)
+    assert len(gates) == plate.N_GATES[False]
+    assert all(g.passed for g in gates), [g.line() for g in gates if not g.passed]
+    slipped = {g.name for g in gates if g.regressed(3.0).passed}
+    assert slipped == set(FULL_PLATE_SLIPS), slipped
+
+
+def test_plate_gates_on_the_recorded_full_run():
+    """The recorded full run passes the csph gates at H/Δx = 40 and the order gate, and each fails
+    its regression (three times the error at 40; the order less log2(3)). The old order gate, on
+    the dynamic periods against the modal limit, read 1.18 from the same run (their error tends to
+    the finite amplitude's shift, −0.02 %, not to zero): it failed a run without a defect."""
+    from studies.common import observed_order
+
+    plate, ds = recorded_plate_dataset()
+    ref = float(ds.fem_modal_converged)
+    g = {x.name: x for x in plate.gates(ds)}
+    fine = g["plate csph at H/dx = 40: period vs FEM modal period"]
+    order = g["plate csph: observed order of the (modal) period error"]
+    for x in (fine, order):
+        assert x.passed and not x.regressed(3.0).passed, x.line()
+    assert order.observed == pytest.approx(1.91, abs=0.01)
+    h = 1.0 / np.array([5, 10, 20, 40])
+    assert observed_order(h, np.array(CSPH_DYNAMIC) - ref) < plate.MIN_ORDER  # the old gate
+    # the dynamic periods' error tends to a constant: the finite amplitude's shift, which the
+    # modal periods do not have (dynamic/modal − 1 the same on every rung, −0.013 … −0.016 %)
+    shift = np.array(CSPH_DYNAMIC) / np.array(CSPH_MODAL) - 1
+    assert np.all((-2e-4 < shift) & (shift < -1e-4)), shift
 
 
 def test_plate_nan_at_h10_fails_all_three_gates():
@@ -234,19 +336,21 @@ def test_stability_crashed_run_is_not_an_expected_instability():
 # -- the gates of the full runs, on their recorded errors ----------------------------------------
 # The quick run holds a part of the gates; the full runs (too slow for the tests) hold the rest.
 # For those the errors the README and the study modules record are fed three-fold to the study's
-# own tolerance. Where a tripled recorded error still passes, the tolerance is the method's expected
-# error and the recorded error lies far below it (a cancellation the derivation cannot promise):
-# marked, strict, so that the list stays the true one (issue 42's note names each).
-SLIPS = pytest.mark.xfail(strict=True, reason="recorded error far below the method's expected error")
+# own tolerance (the plate's whole full run: test_every_gate_of_the_recorded_full_plate_run_...).
+# Where a tripled recorded error still passes, the tolerance is the method's expected error and
+# the recorded error lies far below it (a cancellation the derivation cannot promise): marked,
+# strict, with why, so that the list stays the true one (issue 42's note names each).
 RECORDED = [
-    ("plate", "TOL_PERIOD_CONSISTENT", 3.05e-4, "csph at H/dx = 10, dynamic (issue 42)"),
     ("plate", "TOL_PERIOD_CONSISTENT", 3e-4, "hpm_vc at H/dx = 10, modal (README)"),
-    ("plate", "TOL_PERIOD_FINE", 7e-5, "csph at H/dx = 40, modal (tests/test_consistency.py)"),
-    ("plate", "TOL_PERIOD", 1.8e-2, "hpm at H/dx = 10 (README)"),
     ("plate", "TOL_FEM_THIN_PLATE", 4.7e-3, "FEM at 16 across H (notes.md: 0.2553 s)"),
     ("cantilever", "TOL_CONSISTENT_FEM", 1.0e-3, "csph at H/dx = 10, largest load (README)"),
     pytest.param("cantilever", "TOL_CONSISTENT_FEM", 3e-4, "hpm_vc at H/dx = 10 (README)",
-                 marks=SLIPS),
+                 marks=pytest.mark.xfail(strict=True, reason=(
+                     "cannot be tightened: the expected error at H/dx = 10 is the bulk's O(dx^2) "
+                     "term (2 x 0.04 %, the free-free beam) plus the clamp's corner term of about "
+                     "that size and of either sign; hpm_vc's +0.03 % is their near-cancellation, "
+                     "and a tolerance catching its tripled 0.09 % would lie below the bulk term "
+                     "plus the corner's (0.16 %), the error the method should have"))),
     ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
     ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
     ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam.py)"),
@@ -277,16 +381,20 @@ def test_exactness_gates_of_the_full_run_catch_their_defect():
         assert not Gate.at_most("x", 0.0, tol, "r", "ref", defect=defect).regressed().passed, tol
 
 
-@pytest.mark.parametrize("r,recorded", [
-    (5, 5.69e-2), (10, 1.86e-2),
-    pytest.param(15, 8.6e-3, marks=SLIPS)])
+@pytest.mark.parametrize("r,recorded", [(5, 5.69e-2), (10, 1.86e-2), (15, 8.6e-3)])
 def test_microcantilever_3d_static_slope_gates_fail_a_threefold_recorded_error(r, recorded):
     """The default 3-D run's static csph slopes (README: +5.69, +1.86, +0.86 % at H/Δx = 5, 10,
-    15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against their
-    tolerance max(1 %, e_FEM(5)(10/r)^p). At 15 the error model asks 3.5 % and csph is at 0.86 %:
-    a tripled error passes (the finest's own 1 % gate, TOL_SLOPE, fails it)."""
-    from studies.microcantilever import _tolerance
+    15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against the gates
+    that read them: each rung's max(1 %, e_FEM(5)(10/r)^p) and, at the finest (15), the issue's
+    1 % (TOL_SLOPE, finest_slope_gates). A tripled error fails one of them at least: at 5 and 10
+    the rung's own; at 15 the rung's error model asks 3.5 % — csph lies 4 times below the FEM's
+    error at the same nodal spacing, a margin the model cannot promise, so the rung's tolerance
+    stays the model's — and the finest's 1 % fails the tripled 2.6 %."""
+    from studies.microcantilever import STATIC_RESOLUTIONS_3D, TOL_SLOPE, _tolerance
 
-    tol = _tolerance(5, 8778.3 / 8324.1 - 1, r)
-    assert recorded <= tol
-    assert not Gate.at_most("slope", recorded, tol, "r", "ref").regressed(3.0).passed, (r, tol)
+    tols = [_tolerance(5, 8778.3 / 8324.1 - 1, r)]
+    if r == max(STATIC_RESOLUTIONS_3D):
+        tols.append(TOL_SLOPE)
+    assert all(recorded <= t for t in tols)
+    assert any(not Gate.at_most("slope", recorded, t, "r", "ref").regressed(3.0).passed
+               for t in tols), (r, tols)

@@ -171,3 +171,33 @@ TABLE_I = {
     "Hamiltonian (004)": (74.38, 0.114),
     "Gray et al. 2001": (82.0, 0.125),
 }
+
+
+# ------------------------------------------------------------------------------------------------
+# Crack band: the energy a band of J2-plus-damage material spends to fail
+# ------------------------------------------------------------------------------------------------
+
+
+def failure_energy_density(material, eps_L: float) -> float:
+    """g(ε_L), J/m³: the energy a unit reference volume of a J2 material with damage D = ε_p/ε_L
+    (000 eq. 36) spends under uniaxial stress until it fails — the area under its stress–strain
+    curve up to ε_p = ε_L with the vertical drop there (Bažant & Oh 1983): the plastic work
+    ∫₀^{ε_L} σ_y(e) de, integrated from the law's hardening curve (``material.yield_stress``) by
+    adaptive quadrature, plus the elastic energy the drop releases, σ_y(ε_L)²/(2E). Written apart
+    from the material code (its closed form :func:`workbench.materials.j2.plastic_work` and
+    :func:`workbench.scenes.fracture.band_energy_density`), which it checks."""
+    from scipy.integrate import quad
+
+    sy = lambda e: float(material.yield_stress(e))  # noqa: E731
+    W_p = quad(sy, 0.0, float(eps_L), epsabs=0.0, epsrel=1e-12, limit=200)[0]
+    return W_p + sy(eps_L) ** 2 / (2.0 * material.E)
+
+
+def crack_band_energy(material, eps_L: float, band: float, area: float) -> float:
+    """The energy, J, a crack of ``area`` (m², or m per unit thickness in 2-D: the length of the
+    section it crosses) takes in the crack-band model: a band ``band`` (m) wide of material failing
+    at ε_p = ε_L, each unit volume spending g(ε_L) (:func:`failure_energy_density`):
+    G = b · g(ε_L) · A. Under the regularised rule the particles' ε_L,eff keeps Δx·g(ε_L,eff) =
+    b·g(ε_L) (:func:`workbench.scenes.fracture.crack_band_limit`), so a straight column of failed
+    particles across the section takes this at every spacing."""
+    return float(band) * failure_energy_density(material, eps_L) * float(area)
