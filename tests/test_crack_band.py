@@ -18,11 +18,11 @@ import math
 import numpy as np
 import pytest
 
-from studies import rc_beam
+from studies.rc_beam import study as rc_beam
 from studies.common import observed_order
 from studies.crack_band import crack_band
 from workbench.scenes.crack_band import MortarBar
-from workbench.scenes.rc_beam import PAPER_SPACING
+from workbench.materials.mortar_constants import PAPER_SPACING
 
 RESOLUTIONS = (4, 6, 8)
 """Particles across B = 20 mm: 5 (003's spacing), 3.33 and 2.5 mm."""
@@ -175,9 +175,9 @@ def test_rc_beam_energy_per_crack_area_of_a_constructed_band():
     energy W': the ratio grows by W'/W, the fully released share is W/(W + W')."""
     from sph.driver import model_at
     from sph.particles import discretise
-    from studies.rc_beam import crack_band_energy
+    from studies.rc_beam.study import crack_band_energy
     from workbench.materials.mortar import H_DAMAGE, H_W_RELEASED, N_HISTORY, fracture_energy
-    from workbench.scenes import RCBeam
+    from studies.rc_beam import RCBeam
 
     s = RCBeam(specimen="B")
     model, dx = model_at(s, 8)

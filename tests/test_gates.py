@@ -285,7 +285,7 @@ def test_microcantilever_3d_static_slope_gates_fail_a_threefold_recorded_error(r
     15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against their
     tolerance max(1 %, e_FEM(5)(10/r)^p). At 15 the error model asks 3.5 % and csph is at 0.86 %:
     a tripled error passes (the finest's own 1 % gate, TOL_SLOPE, fails it)."""
-    from studies.microcantilever import _tolerance
+    from studies.microcantilever.study import _tolerance
 
     tol = _tolerance(5, 8778.3 / 8324.1 - 1, r)
     assert recorded <= tol

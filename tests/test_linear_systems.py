@@ -126,7 +126,7 @@ def test_csph_static_3d_is_the_same_with_amg(monkeypatch):
     tolerance (1e-8), though Newton solves its systems inexactly: the first iteration of a step
     to the loosest forcing term (FORCING_MAX), the last ones tighter."""
     import sph.static as st
-    import studies.microcantilever as mc
+    import studies.microcantilever.study as mc
 
     sc = mc.MicroCantilever(dim=3)
     slope = {}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sph import driver
-from workbench.scenes.fracture import MicroCantilever
+from studies.microcantilever.scene import MicroCantilever
 from workbench.scenes.params import ParameterError, SceneError
 
 
@@ -38,7 +38,8 @@ def test_a_run_is_validated_on_its_own_ladder():
     """The checks before a run (resolutions, memory) take the ladder the run will take: the 3-D
     one for the 3-D scene (the 2-D ladder's H/Δx = 20 in 3-D would need about 25 GB and was
     refused), the 2-D one in 2-D."""
-    from studies import common, microcantilever as mc
+    from studies import common
+    from studies.microcantilever import study as mc
 
     _, lads = common.validate(mc, MicroCantilever())
     assert lads == {"csph": list(mc.RESOLUTIONS_3D)}
@@ -155,7 +156,7 @@ def test_material_code_against_closed_form(case):
 def test_richardson_limit_and_first_failure_interpolation():
     """The two helpers of gate 1 against closed forms: the Richardson limit of S = S∞ + C h^p is
     S∞ exactly; the first crossing of D = 1 is found by linear interpolation."""
-    from studies.microcantilever import SINGULAR_ORDER, first_failure, fem_slope_limit
+    from studies.microcantilever.study import SINGULAR_ORDER, first_failure, fem_slope_limit
 
     res = (5, 10, 20)
     S = [2.0 + 3.0 * (1.0 / r) ** SINGULAR_ORDER for r in res]
@@ -169,7 +170,7 @@ def test_richardson_limit_and_first_failure_interpolation():
 
 @pytest.fixture(scope="module")
 def fem_quick():
-    from studies.microcantilever import FEM_MAX_ROOT, QUICK_FEM_RESOLUTIONS, fem_ladder
+    from studies.microcantilever.study import FEM_MAX_ROOT, QUICK_FEM_RESOLUTIONS, fem_ladder
 
     # the path of gate 2 (to 0.3 µm): the first failures in the root region on both meshes
     return fem_ladder(MicroCantilever(dim=2), QUICK_FEM_RESOLUTIONS, FEM_MAX_ROOT)
@@ -180,7 +181,7 @@ def test_fem_ladder_converges_at_the_singular_order(fem_quick):
     towards its limit (the compliance of the re-entrant corners converges from the stiff side),
     the window of the csph fit is elastic on both meshes, and both cases fail first where the
     low ε_L is. The slope's observed order over H/h = 5, 10, 20 is the singular order's."""
-    from studies.microcantilever import SINGULAR_ORDER
+    from studies.microcantilever.study import SINGULAR_ORDER
 
     S = fem_quick["slopes"]
     assert np.all(np.isfinite(S)) and S[1] < S[0]
@@ -196,7 +197,7 @@ def test_fem_ladder_converges_at_the_singular_order(fem_quick):
     # within its pre-asymptotic band (measured 1.26; a mesh error of the order h² or a
     # non-converging h^0.5 falls outside it). (It replaces an algebraic identity of the
     # Richardson formula, which held whatever the order.)
-    from studies.microcantilever import FEM_MAX_ROOT, fem_ladder
+    from studies.microcantilever.study import FEM_MAX_ROOT, fem_ladder
 
     S3 = fem_ladder(MicroCantilever(dim=2), (5, 10, 20), FEM_MAX_ROOT, full=(5,))["slopes"]
     np.testing.assert_allclose(S3[:2], S, rtol=1e-9)
@@ -215,7 +216,7 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
     gate 1's FEM check."""
     import dataclasses
 
-    from studies.microcantilever import (CASES, FEM_MAX_ROOT, dataset, fem_ladder, gates,
+    from studies.microcantilever.study import (CASES, FEM_MAX_ROOT, dataset, fem_ladder, gates,
                                          report_notes)
 
     part = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,))
@@ -271,7 +272,7 @@ def test_root_path_stops_after_both_first_failures(fem_quick):
     path points is second order in the step, and four times the fine path's last step costs
     0.03 % (inter) and 0.11 % (intra) at H/h = 10 (studies.microcantilever.ROOT_LADDER_STEP); a
     path that stopped one point early has no failure at all (NaN)."""
-    from studies.microcantilever import CASES, FEM_MAX_ROOT, fem_ladder, root_ladder_path
+    from studies.microcantilever.study import CASES, FEM_MAX_ROOT, fem_ladder, root_ladder_path
 
     lad = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,), root_path=True)
     np.testing.assert_allclose(lad["slopes"], fem_quick["slopes"], rtol=1e-9)
@@ -298,7 +299,7 @@ def test_csph_elastic_slope_against_the_fem(fem_quick):
     1 % of the FEM's limit): a three-fold regression fails."""
     import dataclasses
 
-    from studies.microcantilever import csph_slope, scene_for, slope_tolerance
+    from studies.microcantilever.study import csph_slope, scene_for, slope_tolerance
 
     sc = dataclasses.replace(scene_for(MicroCantilever(dim=2), "inter", "compression"), t_end=4e-7)
     out = driver.solve("csph", sc, 5, crack="visibility")
@@ -320,7 +321,7 @@ def test_first_failure_in_the_root_region(fem_quick):
     (the secant at its first path point, elastic, as the FEM's) is within gate 1's tolerance at
     H/Δx = 5 (13 % from these two meshes; csph is 8 % from their limit, 1.8 % above the FEM at
     H/h = 5)."""
-    from studies.microcantilever import (SINGULAR_ORDER, TOL_FIRST_FAILURE, csph_static,
+    from studies.microcantilever.study import (SINGULAR_ORDER, TOL_FIRST_FAILURE, csph_static,
                                          root_ladder_path, slope_tolerance)
 
     st = csph_static(MicroCantilever(dim=2), 5)
@@ -355,7 +356,7 @@ def test_the_3d_root_region_keeps_clear_of_the_re_entrant_edges():
     """In 3-D the root region leaves out a cylinder of radius EDGE_CLEARANCE·H about each edge
     where a side face of the beam meets the block (x = 0, y = ±B/2), a singular line; in 2-D
     (no such edge) the region is the tension half of the root half alone."""
-    from studies.microcantilever import EDGE_CLEARANCE, root_region
+    from studies.microcantilever.study import EDGE_CLEARANCE, root_region
 
     sc = MicroCantilever()
     d = EDGE_CLEARANCE * sc.H
@@ -376,7 +377,7 @@ def test_limit_spread_of_a_richardson_limit():
     """limit_spread: zero for values converging exactly at the singular order; for values
     converging at another order q, |L(p) − L|/L(p) with L(p) the singular-order extrapolation of
     the two finest (closed form below); NaN below three meshes or without an observed order."""
-    from studies.microcantilever import SINGULAR_ORDER, fem_slope_limit, limit_spread
+    from studies.microcantilever.study import SINGULAR_ORDER, fem_slope_limit, limit_spread
 
     res = np.array([5, 10, 20, 40])
     assert limit_spread(res, 100 + 30 * res ** -SINGULAR_ORDER) == pytest.approx(0, abs=1e-12)
@@ -393,7 +394,7 @@ def test_observed_order_of_three_meshes_at_any_ratio():
     """_order3: the order of values converging exactly as r^-p, for a constant ratio (closed
     form) and for 5, 10, 15 (a root of the ratio equation); NaN where the differences change
     sign or no positive order fits."""
-    from studies.microcantilever import _order3
+    from studies.microcantilever.study import _order3
 
     for res in ((5, 10, 20), (5, 10, 15), (4, 7, 15)):
         r = np.array(res, float)
@@ -415,7 +416,7 @@ def test_static_slope_gates(errors, passed):
     uncertainty is at most half of that."""
     import xarray as xr
 
-    from studies.microcantilever import static_slope_gates
+    from studies.microcantilever.study import static_slope_gates
 
     sr = [5, 10, 15]
     ds = xr.Dataset(coords={"static_resolution": sr, "fem_resolution": [5, 10, 15]})
@@ -430,7 +431,7 @@ def test_static_slope_gates(errors, passed):
 
 def test_static_ladder_reaches_the_finest_resolution():
     """Gate 2's static runs: the run's resolutions and STATIC_FINEST (40), whatever the ladder."""
-    from studies.microcantilever import STATIC_FINEST, static_resolutions
+    from studies.microcantilever.study import STATIC_FINEST, static_resolutions
 
     assert STATIC_FINEST == 40
     assert static_resolutions((5, 10, 20)) == [5, 10, 20, 40]
@@ -450,7 +451,7 @@ def test_finest_gates(slope, root, spread, status, passed):
     most half of it; a failed or missing finest run fails, it is not left out."""
     import xarray as xr
 
-    from studies.microcantilever import finest_gates
+    from studies.microcantilever.study import finest_gates
 
     sr = [5, 10, 20, 40]
     ds = xr.Dataset(coords={"case": ["inter", "intra"], "static_resolution": sr})
@@ -471,7 +472,7 @@ def test_root_variables_on_their_own_coordinate():
     r^-1.5 read back 1.5; a run that has yielded at its first point has no slope (NaN)."""
     import xarray as xr
 
-    from studies.microcantilever import CASES, _root_variables, _static_variables, finest_gates
+    from studies.microcantilever.study import CASES, _root_variables, _static_variables, finest_gates
 
     sr = [5, 10, 20, 40]
     lim, slim = 180.0, 1.6e9
@@ -502,7 +503,7 @@ def test_energy_balance_and_quasi_static_measures():
     kinetic/elastic ratio (closed forms), the balance error is the largest |W − ΣE|/W over the
     records (from the first with W > 0) and the ratio the largest K/E over the second half of
     the time to the first failure."""
-    from studies.microcantilever import run_summary
+    from studies.microcantilever.study import run_summary
 
     t = np.linspace(0.0, 5e-6, 401)
     W = 1e-9 * (t / t[-1]) ** 2
@@ -523,7 +524,7 @@ def test_quasi_static_window_starts_after_the_ramp(t_first, expected):
     """Gate 4's window starts at the end of the velocity ramp (t_ramp = 0.5 µs) when the first
     failure comes after it: a K/E of 2 % inside the ramp (the start-up transient) is not read, the
     0.2 % after it is; a failure within the ramp keeps the second half of the time to it."""
-    from studies.microcantilever import run_summary
+    from studies.microcantilever.study import run_summary
 
     scene = MicroCantilever(dim=2)
     assert scene.t_ramp == pytest.approx(0.5e-6)
@@ -553,7 +554,7 @@ def test_crack_band_limit_keeps_the_energy_per_crack_area():
     under the uniaxial Swift curve to failure (to the bisection's 1e-12, checked at 1e-9); ε_L
     itself where the spacing is the band; each grain its own modulus; the band below
     spacing·g(0)/g(ε_L) refused with one line naming ``band``."""
-    from workbench.scenes.fracture import TABLE2_E, crack_band_limit
+    from studies.microcantilever.scene import TABLE2_E, crack_band_limit
     from workbench.materials import Material
 
     sc = MicroCantilever(dim=2, case="intra", band=1e-6)
@@ -598,7 +599,7 @@ def test_fracture_energy_of_the_main_crack():
     11 at x = 2 µm stepping sideways once, against a patch of 3 at the top near x = 8 µm; its
     energy is Σ V (W_p + W_rel) over it plus what cut pairs released (the run's released energy
     less Σ V W_rel), in closed form."""
-    from studies.microcantilever import crack_particles, fracture_energy
+    from studies.microcantilever.study import crack_particles, fracture_energy
 
     dx = 0.5e-6
     crack = [(4, j) for j in range(6)] + [(5, j) for j in range(6, 11)]
@@ -617,7 +618,7 @@ def test_fracture_energy_at_the_separation():
     ``at_separation``): a particle that fails later (here one at the top face beside the crack,
     after the cut) is left out, and the released energy is the one then; ``at='end'`` takes the
     final state; without a separation the final state is the crack's."""
-    from studies.microcantilever import fracture_energy
+    from studies.microcantilever.study import fracture_energy
     from workbench.materials import HIST_W_P
 
     dx = 0.5e-6
@@ -644,7 +645,7 @@ def test_band_gate():
     back (G ∝ Δx exactly: 1)."""
     import xarray as xr
 
-    from studies.microcantilever import (band_gates, band_ladder, fracture_ladder, fracture_note,
+    from studies.microcantilever.study import (band_gates, band_ladder, fracture_ladder, fracture_note,
                                          spacing_power)
 
     res = np.array([5, 10, 15, 20])
@@ -679,7 +680,7 @@ def test_band_gate():
 def test_deletion_summary_counts_the_deleted_elements_by_region():
     """Gate 6's measure for the FEM with element deletion: the deleted elements per region and
     their share where the case's low ε_L is (the boundaries for inter, the grains for intra)."""
-    from studies.microcantilever import deletion_summary
+    from studies.microcantilever.study import deletion_summary
 
     names = ["grain0", "grain1", "gb01"]
     region = np.array([0, 0, 2, 2, 1, 1, 2])
@@ -695,7 +696,7 @@ def test_background_process_returns_and_ends():
     comes back, and closing it ends the process."""
     import operator
 
-    from studies.microcantilever import _Background
+    from studies.microcantilever.study import _Background
 
     job = _Background(operator.add, 2, 3)
     try:
@@ -715,7 +716,7 @@ def test_background_process_that_dies_is_a_result_not_a_hang():
 
     import xarray as xr
 
-    from studies.microcantilever import BackgroundFailed, _Background, gates
+    from studies.microcantilever.study import BackgroundFailed, _Background, gates
 
     job = _Background(time.sleep, 30.0)
     try:
@@ -771,7 +772,7 @@ def test_slope_off_the_ladder_against_the_fem_of_the_same_model(fem_quick):
     H/h = 5 and 10). They agree to 1.9 % with the nearest-line ends; with the ends inside the patch
     (before patch_edges) csph's end particles stood 0.83 µm apart and its slope was 32 % below the
     FEM's, which kept nodes 1.67 µm apart at its spacing h/2."""
-    from studies.microcantilever import FEM_STEP, csph_static, fem_static, slope_tolerance
+    from studies.microcantilever.study import FEM_STEP, csph_static, fem_static, slope_tolerance
 
     sc = MicroCantilever(dim=2)
     st = csph_static(sc, 6, fem_max=FEM_STEP)
@@ -792,7 +793,7 @@ def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_p
     30/14 % and 26/12 %), and whose gates at the finest fail with two meshes: no observed order,
     so no uncertainty of the limit (NaN), and H/Δx = 10 is not within the issue's 3 %. Its
     figure, its accuracy-against-cost rows (csph and the FEM per case) and its report notes."""
-    from studies import microcantilever_root as study
+    from studies.microcantilever import root as study
     from workbench import results
     from app import cli
 
@@ -828,7 +829,8 @@ def test_crack_map_draws_every_particle(monkeypatch, tmp_path):
     matplotlib.use("Agg")
     import xarray as xr
 
-    from studies import figures, microcantilever as mc
+    from studies import figures
+    from studies.microcantilever import study as mc
 
     figs = []
     monkeypatch.setattr(figures, "save", lambda fig, path: figs.append(fig) or path)
@@ -866,7 +868,7 @@ def test_fragment_measures():
     """fragment_measures: the largest speed of the failed particles and their kinetic energy
     Σ ½ ρ V |v|² over the released energy, by hand on three particles (two failed); NaN without
     velocities."""
-    from studies.microcantilever import fragment_measures
+    from studies.microcantilever.study import fragment_measures
 
     sc = MicroCantilever(dim=2)
     out = dict(v=np.array([[3.0, 4.0], [0.0, 1.0], [9.0, 9.0]]), volume=np.array([2e-12, 1e-12, 1e-12]),

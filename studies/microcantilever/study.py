@@ -1,13 +1,13 @@
 """Micro-cantilever study: inter- and intra-granular fracture of a ceramic micro-cantilever with five
 Voronoi grains and four grain boundaries (paper 000 §4–5, Fig. 5–6; the scene is
-:class:`workbench.scenes.MicroCantilever`, its choices in :mod:`workbench.scenes.fracture`).
+:class:`.scene.MicroCantilever`, its choices in :mod:`.scene`).
 
 Each case (``inter``: ε_L = 0.002 on the grain boundaries; ``intra``: in the grains) runs with
 CSPH under a failure rule — ``compression`` (the default: a failed particle keeps a compressive
 volumetric response) or ``literal`` (stress zero) — both with the visibility criterion of
 :mod:`sph.crack`, and, in the full run, ``compression`` without it (``none``: the pairs never
 change), which shows why the criterion is there, and, on a ladder, ``regularised`` (``compression``
-with the crack band of :func:`workbench.scenes.fracture.crack_band_limit`). Stored per run: the
+with the crack band of :func:`.scene.crack_band_limit`). Stored per run: the
 load–deflection curve at the loading patch, the failed fraction per region over time, the energies
 over time (external work, kinetic, elastic, plastic work, released by failure and cracking), the
 energy of the main crack, and the final particles (for the figure of the cracked cantilevers, as
@@ -50,10 +50,10 @@ import numpy as np
 import xarray as xr
 
 from workbench import results
-from workbench.scenes.fracture import MicroCantilever
+from .scene import MicroCantilever
 
-from .common import Gate, check_resolutions, observed_order
-from .sweep import Task, run_tasks
+from ..common import Gate, check_resolutions, observed_order
+from ..sweep import Task, run_tasks
 
 NAME = "microcantilever"
 SCENE = MicroCantilever
@@ -77,7 +77,7 @@ RULES = {"compression": ("compression", "visibility"), "literal": ("literal", "v
          "no_crack_rule": ("compression", "none"), "regularised": ("compression", "visibility")}
 """Rule name -> (failure mode of the J2 law, ``crack`` option of csph). ``regularised`` is
 ``compression`` with the low ε_L tied to a crack band of width :data:`BAND` (the scene's ``band``
-when that is set; :func:`workbench.scenes.fracture.crack_band_limit`)."""
+when that is set; :func:`.scene.crack_band_limit`)."""
 QUICK_RULES = ("compression",)
 GATED_RULES = ("compression", "literal", "regularised")
 LADDER_RULES = ("compression", "regularised")
@@ -1733,7 +1733,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     import matplotlib.pyplot as plt
     from pathlib import Path
 
-    from .figures import save
+    from ..figures import save
 
     outdir = Path(outdir)
     figs = []
@@ -1806,7 +1806,7 @@ def fracture_figure(ds: xr.Dataset, path):
     and crack band (``regularised``), each case; the line G ∝ Δx through the coarsest literal run."""
     import matplotlib.pyplot as plt
 
-    from .figures import save
+    from ..figures import save
 
     fig, ax = plt.subplots(figsize=(6, 4.2))
     H = float(ds.attrs["param_H"])
@@ -1844,7 +1844,7 @@ def crack_map_limits(x: np.ndarray, up: int) -> tuple[tuple[float, float], tuple
 
 def cracked(ds: xr.Dataset, path):
     """The cracked cantilevers side by side (Fig. 5 and 6 of 000), :func:`crack_figure`."""
-    from .figures import save
+    from ..figures import save
 
     return save(crack_figure(ds), path)
 

@@ -22,10 +22,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.scenes.fracture import MicroCantilever
+from .scene import MicroCantilever
 
-from . import microcantilever as mc
-from .common import check_resolutions
+from . import study as mc
+from ..common import check_resolutions
 
 NAME = "microcantilever_root"
 SCENE = MicroCantilever
@@ -100,7 +100,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     import matplotlib.pyplot as plt
     from pathlib import Path
 
-    from .figures import STYLE, save
+    from ..figures import STYLE, save
 
     unit = ds.fem_root_limit.attrs.get("units", "N")
     scale, shown = (1e3, "mN") if unit == "N" else (1e-3, "kN/m")

@@ -1,7 +1,7 @@
 """RC mortar beam under drop-weight impact (003): specimens A and B, classic SPH and CSPH.
 
-Paper 003, §2 and §4; the scene is :class:`workbench.scenes.RCBeam` (its reading of the paper
-and its choices in :mod:`workbench.scenes.rc_beam`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
+Paper 003, §2 and §4; the scene is :class:`.scene.RCBeam` (its reading of the paper
+and its choices in :mod:`.scene`): specimens A (800 mm span, stirrups, 100 kg at 2.2 m/s, flexural
 failure) and B (400 mm, 1.4 m/s, shear failure), classic SPH (``sph``, the paper's method, with
 the hyperelastic stress path the mortar needs) and CSPH (``csph``, nodal integration: the
 integration-consistent correction's critical step is 0.2 of the CFL estimate here) side by side.
@@ -48,12 +48,12 @@ import numpy as np
 import xarray as xr
 
 from workbench import results
-from workbench.scenes import RCBeam
-from workbench.scenes.rc_beam import PAPER_SPACING
-from workbench.scenes.rc_beam import SPECIMENS as SPECIMENS_OF
+from workbench.materials.mortar_constants import PAPER_SPACING
 
-from .common import Gate, check_resolutions
-from .sweep import Task, run_tasks
+from ..common import Gate, check_resolutions
+from ..sweep import Task, run_tasks
+from .scene import SPECIMENS as SPECIMENS_OF
+from .scene import RCBeam
 
 NAME = "rc_beam"
 SCENE = RCBeam
@@ -282,7 +282,7 @@ def run(scene: RCBeam | None = None, solvers=None, resolutions=None, quick: bool
     res = sorted({r for v in lad.values() for r in v})
     ds = dataset(scene, outs, solvers, res, quick, modal, kr, slow=slow)
     if fields is not None:
-        from .common import field_series
+        from ..common import field_series
 
         ds.attrs["field_series"] = ", ".join(
             n for n in (field_series(t.scene, [t]) for t in tasks) if n)
@@ -922,7 +922,7 @@ class SlowImpactFem:
     def model(self, spacing: float | None = None):
         """The FEM's model (``spacing``, the element size, does not enter)."""
         import workbench.scenes.model as m
-        from workbench.scenes.rc_beam import staircase
+        from .scene import staircase
         from workbench.scenes.shapes import Box, Plane, Point, Union
 
         s, dx = self.beam, self.dx
@@ -1431,7 +1431,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     import matplotlib.pyplot as plt
     from pathlib import Path
 
-    from .figures import save
+    from ..figures import save
 
     outdir = Path(outdir)
     figs = []
@@ -1533,7 +1533,7 @@ def impact_force_figure(ds: xr.Dataset, specimens, path):
     range."""
     import matplotlib.pyplot as plt
 
-    from .figures import save
+    from ..figures import save
 
     r = ds.resolution.values[-1]
     fig, axes = plt.subplots(1, len(specimens), figsize=(7 * len(specimens), 4.0), squeeze=False)
@@ -1565,7 +1565,7 @@ def crack_figure(ds: xr.Dataset, path):
     principal damage direction — drawn where the particle is cracked (:func:`crack_orientation`)."""
     import matplotlib.pyplot as plt
 
-    from .figures import save
+    from ..figures import save
 
     dx = float(ds.spacing.values[-1])
     eps_cr = float(ds.attrs["param_eps_release"]) * (
