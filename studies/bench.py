@@ -109,11 +109,11 @@ def scene_options(name: str, solver: str) -> dict:
         method, extra = VARIANTS[solver]
         return {**scene_options(name, method), **extra}
     if name == "microcantilever3d" and solver == "csph":
-        from .microcantilever.study import OPTIONS_3D
+        from .microcantilever.ladders import OPTIONS_3D
 
         return dict(OPTIONS_3D)
     if name == "rc_beam":
-        from .rc_beam.study import OPTIONS
+        from .rc_beam.ladders import OPTIONS
 
         return dict(OPTIONS.get(solver, {}))
     return {}

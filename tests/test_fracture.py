@@ -345,7 +345,7 @@ def test_the_cut_does_not_depend_on_how_long_the_run_goes_on(run2d):
     records the cut: the same time and the same state at it as the run that stopped t_after
     later (the records fall at the same steps: the same t_end), so the crack's energy measured
     there (studies.microcantilever.fracture_energy) is the same."""
-    from studies.microcantilever.study import fracture_energy
+    from studies.microcantilever.derive import fracture_energy
 
     t_end = MicroCantilever().t_end
     out = driver.solve("csph", MicroCantilever(dim=2, t_after=0.0), 5)

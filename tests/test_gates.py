@@ -249,7 +249,7 @@ RECORDED = [
                  marks=SLIPS),
     ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
     ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
-    ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam.py)"),
+    ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam/slow_impact.py)"),
     ("microcantilever", "TOL_SLOPE", 8.6e-3, "csph static H/dx = 15, 3-D, the finest (README)"),
     ("microcantilever", "TOL_SLOPE", 3.5e-3, "csph static H/dx = 40, 2-D root ladder (README)"),
     ("microcantilever", "TOL_FIRST_FAILURE", 2.15e-2, "intra, csph static H/dx = 40, 2-D (README)"),
@@ -285,7 +285,7 @@ def test_microcantilever_3d_static_slope_gates_fail_a_threefold_recorded_error(r
     15 from the FEM's limit, whose own error at H/h = 5 is 8778.3/8324.1 − 1) against their
     tolerance max(1 %, e_FEM(5)(10/r)^p). At 15 the error model asks 3.5 % and csph is at 0.86 %:
     a tripled error passes (the finest's own 1 % gate, TOL_SLOPE, fails it)."""
-    from studies.microcantilever.study import _tolerance
+    from studies.microcantilever.gates import _tolerance
 
     tol = _tolerance(5, 8778.3 / 8324.1 - 1, r)
     assert recorded <= tol

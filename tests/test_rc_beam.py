@@ -158,7 +158,8 @@ def test_consistent_csph_is_stable_below_its_critical_step(consistent_a):
     at 1.2 Δt_crit it grows exponentially within a few tens of steps (the central-difference
     amplification of the highest mode above ω Δt = 2: measured 38 steps), so the step that
     separates the two is the spectrum's, within (0.9, 1.2)."""
-    from studies.rc_beam.study import TOL_ENERGY, energy_error
+    from studies.rc_beam.derive import energy_error
+    from studies.rc_beam.gates import TOL_ENERGY
 
     runs, dt_cfl = consistent_a
     ok, bad = runs[0.9], runs[1.2]
