@@ -34,7 +34,7 @@ PLANE_3D = "none (3-D)"
 def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
             static: dict | None = None, deletion: dict | None = None) -> xr.Dataset:
     """The study's dataset from the runs ``outs`` {(case, rule, resolution): driver output} and
-    the FEM reference ``fem`` (:func:`fem_ladder`, or None)."""
+    the FEM reference ``fem`` (:func:`.static.fem_ladder`, or None)."""
     time = np.linspace(0.0, scene.t_end, N_TIME)
     dims = ("solver", "case", "rule", "resolution")
     shp = (1, len(CASES), len(rules), len(res))
@@ -149,11 +149,11 @@ def _deletion_variables(ds: xr.Dataset, deletion: dict) -> None:
 
 
 def _static_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
-    """The static csph runs ``static`` {H/Δx: :func:`csph_static`} on their own coordinate
+    """The static csph runs ``static`` {H/Δx: :func:`.static.csph_static`} on their own coordinate
     ``static_resolution``: the elastic slope of each (the secant at the first path point), its
     error against the FEM's slope limit and the error's observed order (least squares; gate 1),
-    wall time and status. In 2-D the ladder and H/Δx = 40 (:data:`STATIC_FINEST`), in 3-D
-    :data:`STATIC_RESOLUTIONS_3D`."""
+    wall time and status. In 2-D the ladder and H/Δx = 40 (:data:`.ladders.STATIC_FINEST`), in 3-D
+    :data:`.ladders.STATIC_RESOLUTIONS_3D`."""
     sr = sorted(static)
     ds.coords["static_resolution"] = ("static_resolution", np.array(sr), {
         "units": "-", "long_name": "particles across H of the static csph runs (gates 1 and 2)"})
@@ -172,7 +172,7 @@ def _static_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
 
 
 def _root_variables(ds: xr.Dataset, fem: dict, static: dict) -> None:
-    """Gate 2's variables: the first failure in :func:`root_region` of the FEM ladder (load,
+    """Gate 2's variables: the first failure in :func:`.static.root_region` of the FEM ladder (load,
     deflection, Richardson limit and its uncertainty, each mesh's error) and of the static csph
     runs ``static`` on ``static_resolution`` (:func:`_static_variables`: load, deflection, error
     against the FEM's limit, and that error's observed order)."""

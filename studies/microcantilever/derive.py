@@ -75,12 +75,12 @@ def fem_slope_limit(res, slopes, order: float = SINGULAR_ORDER) -> float:
 
 def limit_spread(res, values) -> float:
     """The uncertainty of a Richardson limit taken at the singular order, as a fraction of it:
-    |L(p) − L(q)|/|L(p)|, L the limit from the two finest meshes at p = SINGULAR_ORDER and at
-    the order q observed on the three finest (:func:`_order3`). NaN below three meshes or where
-    no order is observed (the differences change sign). It is the reference's own error where a
-    computed value is checked against the limit rather than against a mesh (:func:`finest_gates`):
-    the finest mesh's distance from the limit (``slope_error``, ``root_error``) is the error of
-    that mesh, not of the limit."""
+    |L(p) − L(q)|/|L(p)|, L the limit from the two finest meshes at p = SINGULAR_ORDER and at the
+    order q observed on the three finest (:func:`_order3`). NaN below three meshes or where no order
+    is observed (the differences change sign). It is the reference's own error where a computed
+    value is checked against the limit rather than against a mesh (:func:`.gates.finest_gates`): the
+    finest mesh's distance from the limit (``slope_error``, ``root_error``) is the error of that
+    mesh, not of the limit."""
     res, values = np.asarray(res, float), np.asarray(values, float)
     if len(res) < 3:
         return float("nan")
@@ -201,7 +201,7 @@ def quasi_static_start(t_first: float, scene: MicroCantilever) -> float:
     start-up transient of the ramp, 4/(ω₁t)² for a beam of first frequency ω₁ whose end moves at
     v₀t/T (K = ½m v², E = ½k d², d = v₀t²/(2T)): the same at every resolution and above 1 % before
     t = 20/ω₁ (about 0.3 µs here), whatever the loading rate after the ramp
-    (:data:`TOL_QUASI_STATIC`)."""
+    (:data:`.gates.TOL_QUASI_STATIC`)."""
     t_ramp = float(getattr(scene, "t_ramp", 0.0))
     return max(0.5 * t_first, t_ramp) if t_ramp < t_first else 0.5 * t_first
 

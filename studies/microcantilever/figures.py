@@ -86,8 +86,8 @@ def plot(ds: xr.Dataset, outdir) -> list:
 
 
 def fracture_figure(ds: xr.Dataset, path):
-    """Gate 5: the main crack's energy against the spacing, literal ε_L (``compression``)
-    and crack band (``regularised``), each case; the line G ∝ Δx through the coarsest literal run."""
+    """Gate 5: the main crack's energy against the spacing, literal ε_L (``compression``) and crack
+    band (``regularised``), each case; the line G ∝ Δx through the coarsest literal run."""
     import matplotlib.pyplot as plt
 
     from ..figures import save

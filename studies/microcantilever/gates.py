@@ -128,8 +128,8 @@ def _runs(ds, rules=GATED_RULES):
 
 
 def band_gates(ds: xr.Dataset) -> list[Gate]:
-    """Gate 5 (issue 11): on a ladder of three resolutions or more where the band is wider than
-    the spacing (:func:`band_ladder`), the regularised rule's fracture energy within TOL_BAND
+    """Gate 5 (issue 11): on a ladder of three resolutions or more where the band is wider than the
+    spacing (:func:`.derive.band_ladder`), the regularised rule's fracture energy within TOL_BAND
     across it (max/min − 1; NaN, a failed gate, when a run of it reports none)."""
     g = []
     for case in ds.case.values:
@@ -193,14 +193,14 @@ def gates(ds: xr.Dataset) -> list[Gate]:
 
 MIN_ORDER_SHARE = 0.5
 """The observed order of csph's slope error (least squares over the static ladder) must reach
-this share of :data:`SINGULAR_ORDER`: a consistent discretisation converges at the singular
+this share of :data:`.derive.SINGULAR_ORDER`: a consistent discretisation converges at the singular
 order asymptotically; half of it leaves room for a pre-asymptotic ladder and the reference
 limit's own error, and it separates converging from stagnating (nodal integration in 3-D, −6.5
 and −6.1 % at H/Δx = 5 and 10, observes about 0.1)."""
 
 
 def static_slope_gates(ds: xr.Dataset) -> list[Gate]:
-    """Gate 1 on the static slope ladder (the 3-D run, :data:`STATIC_RESOLUTIONS_3D`): each
+    """Gate 1 on the static slope ladder (the 3-D run, :data:`.ladders.STATIC_RESOLUTIONS_3D`): each
     static csph slope within max(1 %, e(r)) of the FEM's limit (:func:`slope_tolerance`), the
     error's observed order at least MIN_ORDER_SHARE of the singular order, and the finest within
     1 % (:func:`finest_slope_gates`)."""
@@ -256,11 +256,12 @@ def root_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
 
 def finest_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
     """Gate 1 at the finest resolution, the issue's bounds as written: the static csph run at the
-    finest H/Δx (:data:`STATIC_FINEST` in 2-D, the last of :data:`STATIC_RESOLUTIONS_3D` in 3-D)
-    has its elastic slope within TOL_SLOPE (1 %; ``slope``) and each case's load at the first
-    failure in the root region within TOL_FIRST_FAILURE (3 %) of the FEM's Richardson limits;
-    each limit's own uncertainty (:func:`limit_spread`) at most FEM_SHARE of the bound it serves
-    (NaN, so failing, below three meshes)."""
+    finest H/Δx (:data:`.ladders.STATIC_FINEST` in 2-D, the last of
+    :data:`.ladders.STATIC_RESOLUTIONS_3D` in 3-D) has its elastic slope within TOL_SLOPE (1 %;
+    ``slope``) and each case's load at the first failure in the root region within TOL_FIRST_FAILURE
+    (3 %) of the FEM's Richardson limits; each limit's own uncertainty
+    (:func:`.derive.limit_spread`) at most FEM_SHARE of the bound it serves (NaN, so failing, below
+    three meshes)."""
     r = int(ds.static_resolution.values.max())
     g = finest_slope_gates(ds) if slope else []
     for case in ds.case.values:
@@ -280,7 +281,7 @@ def finest_gates(ds: xr.Dataset, slope: bool = True) -> list[Gate]:
 
 def finest_slope_gates(ds: xr.Dataset) -> list[Gate]:
     """The issue's 1 % on the elastic slope at the finest static csph run (both dimensions), and
-    the FEM limit's own uncertainty (:func:`limit_spread`) at most FEM_SHARE of it (NaN, so
+    the FEM limit's own uncertainty (:func:`.derive.limit_spread`) at most FEM_SHARE of it (NaN, so
     failing, below three meshes)."""
     r = int(ds.static_resolution.values.max())
     return [Gate.at_most(

@@ -14,8 +14,8 @@ SOLVERS = ("csph",)
 RESOLUTIONS = {"csph": (5, 10, 15, 20)}
 """Particles across H of a 2-D run (``--set dim=2``): the ladder of gates 1, 2 and 5 (the rules
 outside LADDER_RULES stop at H/Δx = 10). Gate 5 takes the runs whose crack band is wider than the
-spacing (:func:`band_ladder`: H/Δx = 10, 15, 20 with the 1 µm band; at 5 the band is one spacing
-and the regularised run is the ``compression`` one), so the ladder holds three of them."""
+spacing (:func:`.derive.band_ladder`: H/Δx = 10, 15, 20 with the 1 µm band; at 5 the band is one
+spacing and the regularised run is the ``compression`` one), so the ladder holds three of them."""
 RESOLUTIONS_3D = (5,)
 """Particles across H of the 3-D run (the default): 1776 particles; the cases cut apart at 1.36 µs
 (inter) and 1.04 µs (intra) and stop 1.5 µs later (t_after), 59 k and 52 k steps, 63 s and 98 s on
@@ -57,17 +57,18 @@ FEM_RESOLUTIONS = (5, 10, 20, 40, 80)
 """Elements (9-node quadrilaterals, plane strain) across H of the FEM reference of a 2-D run; the
 smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5). The reference of the
 static csph run at :data:`STATIC_FINEST` is the limit of the two finest. The ladder goes to 80
-(38 400 elements, 4 minutes on one core along the root path) because the inter case's load at
-the first failure, read where the geometry puts each point (:func:`fem_static`), converges at
+(38 400 elements, 4 minutes on one core along the root path) because the inter case's load at the
+first failure, read where the geometry puts each point (:func:`.static.fem_static`), converges at
 first order from above: 206.4, 192.9, 185.3, 181.8, 180.5 N/m at H/h = 5 to 80, and at 40 the FEM
 is 1.8 % from the limit of 20 and 40, more than half the 3 % it checks; at 80 it is 0.6 % from the
 limit of 40 and 80, which is within 0.4 % of the former."""
 STATIC_FINEST = 40
 """Gate 2's static csph runs (the full 2-D run) are at the run's resolutions and at H/Δx =
 STATIC_FINEST, where the issue's bounds at the finest resolution are checked: the elastic slope
-within 1 % and the load at the first failure within 3 % of the FEM's limit (:func:`finest_gates`).
-9600 particles, about 3.5 minutes on one core; the dynamic runs stop at H/Δx = 20 (a dynamic run
-at 40 has 4 times the particles and twice the steps of one at 20, about an hour)."""
+within 1 % and the load at the first failure within 3 % of the FEM's limit
+(:func:`.gates.finest_gates`). 9600 particles, about 3.5 minutes on one core; the dynamic runs stop
+at H/Δx = 20 (a dynamic run at 40 has 4 times the particles and twice the steps of one at 20, about
+an hour)."""
 QUICK_FEM_RESOLUTIONS = (5, 10)
 """``--quick``: the two cheapest meshes (about 2 and 4 s)."""
 STATIC_RESOLUTIONS_3D = (5, 10, 15)
@@ -78,8 +79,8 @@ path, by Newton): 1776, 12 001 and 38 176 particles; 2 s, 41 s and 4.5 minutes o
 AMG-CG takes 16 s, and did not finish at 15). They run after the FEM ladder, so that the two
 largest jobs do not hold their memory at once. Measured: 8797.5, 8478.6 and 8395.6 N/m, +5.69,
 +1.86 and +0.86 % from the FEM's limit; observed order of the error 1.7 (least squares), and
-1.43 on the values alone (:func:`_order3`; their own limit 8286 N/m, 0.46 % below the FEM's)
-(:func:`static_slope_gates`)."""
+1.43 on the values alone (:func:`.derive._order3`; their own limit 8286 N/m, 0.46 % below the FEM's)
+(:func:`.gates.static_slope_gates`)."""
 FEM_RESOLUTIONS_3D = (5, 10, 15)
 FEM_FULL_PATH_3D = (5,)
 """Gate 1 of the 3-D run (the default): the FEM of the same 3-D grains and boundaries (27-node
@@ -89,7 +90,7 @@ H/h = 10 and 15 at its first path point only, which is elastic (the slope: 10 00
 elements, 2.5e5 and 8.4e5 unknowns, 2.5 and 5.7 minutes, 5.9 and 13.2 GB; the Newton systems by
 AMG-preconditioned CG, :mod:`workbench.linear_systems` — the direct solve took 8 minutes and
 12.6 GB at 10). The slope's limit is the Richardson limit of the two finest at
-:data:`SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is the 2-D corner
+:data:`.derive.SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is the 2-D corner
 extruded, the same exponent); the three meshes observe the order. Measured: 8778.3, 8538.1 and
 8461.7 N/m; observed order 1.08 (the singular order 1.09); limit 8324.1 N/m (8325.0 from the
 5/10 pair)."""
@@ -104,16 +105,16 @@ FEM_MAX_ROOT·H = 0.3 µm, past the first failure in the root region of both cas
 on every mesh (0.16–0.23 µm). The first-failure loads move by less than 0.07 % against steps of
 5 nm throughout (FEM, H/h = 5 and 10), at half the cost."""
 ROOT_LADDER_STEP = 4e-3
-"""The path of :func:`root_ladder` (:func:`root_ladder_path`: the FEM's and the static csph's, in
-2-D and 3-D): the elastic first point FEM_STEP·H, then steps of ROOT_LADDER_STEP·H (20 nm) towards
-FEM_MAX_ROOT·H, each run stopped at the point where both cases have failed in the root region — a
-quarter of the points of the full 2-D run's path, whose 20 steps of FEM_STEP·H cost a 3-D mesh as
-much as the rest. Measured against that fine path (linear interpolation between points is second
-order in the step): the first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at H/h = 10
-in 2-D, and by 0.06 % and 0.49 % at H/h = 5 in 3-D (measured before EDGE_CLEARANCE, when intra
-failed at the edge at 0.10 µm, 0.02 H, where the fine path's steps are a quarter as long; with it,
-at 0.15 µm) — the same on every mesh and in both methods, a fraction of gate 2's 3 %; steps twice
-as long move intra by 1.9 % in 3-D."""
+"""The path of :func:`.study.root_ladder` (:func:`.static.root_ladder_path`: the FEM's and the
+static csph's, in 2-D and 3-D): the elastic first point FEM_STEP·H, then steps of ROOT_LADDER_STEP·H
+(20 nm) towards FEM_MAX_ROOT·H, each run stopped at the point where both cases have failed in the
+root region — a quarter of the points of the full 2-D run's path, whose 20 steps of FEM_STEP·H cost
+a 3-D mesh as much as the rest. Measured against that fine path (linear interpolation between points
+is second order in the step): the first-failure loads move by 0.03 % (inter) and 0.11 % (intra) at
+H/h = 10 in 2-D, and by 0.06 % and 0.49 % at H/h = 5 in 3-D (measured before EDGE_CLEARANCE, when
+intra failed at the edge at 0.10 µm, 0.02 H, where the fine path's steps are a quarter as long; with
+it, at 0.15 µm) — the same on every mesh and in both methods, a fraction of gate 2's 3 %; steps
+twice as long move intra by 1.9 % in 3-D."""
 
 
 def scene_for(scene: MicroCantilever, case: str, rule: str) -> MicroCantilever:

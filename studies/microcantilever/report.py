@@ -17,7 +17,7 @@ from .static import EDGE_CLEARANCE
 def fracture_note(ds: xr.Dataset, case: str) -> str | None:
     """Gate 5's line of the report for ``case``: the crack's energy per run of each ladder rule,
     its fitted power of Δx and its spread — the regularised rule's over the gate's runs
-    (:func:`band_ladder`); None without a ladder."""
+    (:func:`.derive.band_ladder`); None without a ladder."""
     unit = "J/m" if ds.attrs.get("plane") == "strain" else "J"
     parts = []
     for rule in LADDER_RULES:

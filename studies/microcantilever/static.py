@@ -46,9 +46,9 @@ def static_path(scene: MicroCantilever, fem_max: float = FEM_MAX) -> np.ndarray:
 
 
 def root_ladder_path(scene: MicroCantilever) -> np.ndarray:
-    """The deflections of :func:`root_ladder`'s path (2-D and 3-D), m: FEM_STEP·H (elastic: the
-    slope), then on in steps of ROOT_LADDER_STEP·H up to FEM_MAX_ROOT·H
-    (:data:`ROOT_LADDER_STEP`)."""
+    """The deflections of :func:`.study.root_ladder`'s path (2-D and 3-D), m: FEM_STEP·H (elastic:
+    the slope), then on in steps of ROOT_LADDER_STEP·H up to FEM_MAX_ROOT·H
+    (:data:`.ladders.ROOT_LADDER_STEP`)."""
     n = int(round((FEM_MAX_ROOT - FEM_STEP) / ROOT_LADDER_STEP))
     return scene.H * (FEM_STEP + ROOT_LADDER_STEP * np.arange(n + 1))
 
@@ -202,10 +202,10 @@ def csph_static(scene: MicroCantilever, resolution: int, fem_max: float = FEM_MA
 
 def fem_deletion(scene: MicroCantilever, case: str,
                  resolution: int = FEM_DELETION_RESOLUTION) -> dict:
-    """The FEM of ``case`` (the scene's ε_L, the ``compression`` scene) with element deletion at
-    H/h = ``resolution``: ``time``, ``load`` (N/m, downward on the beam: the time mean over each
-    output interval of the patch's reaction, inertia included), ``deflection_down`` (m), the
-    deleted elements and their regions (:func:`deletion_summary`), ``status``, ``wall_time``."""
+    """The FEM of ``case`` (the scene's ε_L, the ``compression`` scene) with element deletion at H/h
+    = ``resolution``: ``time``, ``load`` (N/m, downward on the beam: the time mean over each output
+    interval of the patch's reaction, inertia included), ``deflection_down`` (m), the deleted
+    elements and their regions (:func:`.derive.deletion_summary`), ``status``, ``wall_time``."""
     from fem_reference.model import build, solve_model
 
     sc = scene_for(scene, case, "compression")
@@ -232,20 +232,20 @@ def region_limits(scene: MicroCantilever, spacing: float, model) -> np.ndarray:
 
 def fem_ladder(scene: MicroCantilever, resolutions, fem_max: float = FEM_MAX,
                full=None, root_path: bool = False) -> dict:
-    """The FEM static runs at ``resolutions`` and what gate 1 needs: the elastic slope per mesh
-    (the secant at the first path point, which is elastic), its Richardson limit, each mesh's
-    error against it, the slope window of the csph curves (a quarter to all of the deflection at
-    first yield on the finest mesh: the last path point with ε_p = 0), each case's first
-    failure anywhere and in :func:`root_region` (``first_failure_root``, with its Richardson
-    limit at the singular order, ``root_limit``, and each mesh's error against it,
-    ``root_error``; gate 2), on the path to ``fem_max``·H. The FEM does not depend on the case,
-    the failure rule, the crack band or the drive: one ladder per geometry and material set,
-    computed once per process (read only). ``full``: the resolutions that run the whole path
-    (default: all); the others run its first point only, which is elastic — their slope, and NaN
-    beyond it (the 3-D ladder, :data:`FEM_FULL_PATH_3D`); the window is then the finest full
-    run's. ``root_path`` (:func:`root_ladder`): the first failures in the root region come from runs
-    along :func:`root_ladder_path` at every resolution, each stopped once both cases have failed
-    there (``root_runs``); their first point gives the slope of the meshes not in ``full``."""
+    """The FEM static runs at ``resolutions`` and what gate 1 needs: the elastic slope per mesh (the
+    secant at the first path point, which is elastic), its Richardson limit, each mesh's error
+    against it, the slope window of the csph curves (a quarter to all of the deflection at first
+    yield on the finest mesh: the last path point with ε_p = 0), each case's first failure anywhere
+    and in :func:`root_region` (``first_failure_root``, with its Richardson limit at the singular
+    order, ``root_limit``, and each mesh's error against it, ``root_error``; gate 2), on the path to
+    ``fem_max``·H. The FEM does not depend on the case, the failure rule, the crack band or the
+    drive: one ladder per geometry and material set, computed once per process (read only).
+    ``full``: the resolutions that run the whole path (default: all); the others run its first point
+    only, which is elastic — their slope, and NaN beyond it (the 3-D ladder,
+    :data:`.ladders.FEM_FULL_PATH_3D`); the window is then the finest full run's. ``root_path``
+    (:func:`.study.root_ladder`): the first failures in the root region come from runs along
+    :func:`root_ladder_path` at every resolution, each stopped once both cases have failed there
+    (``root_runs``); their first point gives the slope of the meshes not in ``full``."""
     base = dataclasses.replace(scene, case="inter", failure="compression", name=NAME,
                                dt_reference="cfl", dt_factor=0.3, band=0.0)
     res = tuple(sorted(int(r) for r in resolutions))

@@ -95,14 +95,14 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
 def root_ladder(scene: MicroCantilever | None = None, resolutions=FEM_RESOLUTIONS_3D,
                 fem_resolutions=None) -> xr.Dataset:
     """Gate 2 of the 3-D scene, apart from the default run: the FEM ladder (27-node hexahedra in
-    3-D) and static csph at the same ``resolutions`` along :func:`root_ladder_path`, each stopped at
-    the root region's last first failure, in a dataset without particle runs whose :func:`gates`
-    are gate 1's static slopes and gate 2's (the elastic slope, the load at the first failure in
-    :func:`root_region`, their observed orders). Hours on 2 cores in 3-D: at H/h = 10 the FEM's
-    path takes about 20 minutes and csph's 7, at 15 the FEM's 53 minutes (11 GB) and csph's 44
-    minutes (3.7 GB). ``fem_resolutions``: the FEM's ladder where it is not the same (the 2-D
-    one goes a mesh further: :data:`FEM_RESOLUTIONS`). ``workbench run microcantilever_root``
-    runs it (:mod:`studies.microcantilever_root`)."""
+    3-D) and static csph at the same ``resolutions`` along :func:`.static.root_ladder_path`, each
+    stopped at the root region's last first failure, in a dataset without particle runs whose
+    :func:`.gates.gates` are gate 1's static slopes and gate 2's (the elastic slope, the load at the
+    first failure in :func:`.static.root_region`, their observed orders). Hours on 2 cores in 3-D:
+    at H/h = 10 the FEM's path takes about 20 minutes and csph's 7, at 15 the FEM's 53 minutes (11
+    GB) and csph's 44 minutes (3.7 GB). ``fem_resolutions``: the FEM's ladder where it is not the
+    same (the 2-D one goes a mesh further: :data:`.ladders.FEM_RESOLUTIONS`). ``workbench run
+    microcantilever_root`` runs it (:mod:`studies.microcantilever_root`)."""
     scene = scene or SCENE()
     res = tuple(sorted(int(r) for r in resolutions))
     fres = res if fem_resolutions is None else tuple(sorted(int(r) for r in fem_resolutions))

@@ -90,7 +90,7 @@ CRACK_SCALARS = dict(
                                      "alone)"),
     released_share_full=("-", "share of the released energy in the fully released mortar "
                          "particles"))
-"""Issue 12 gate 6, the energy released per crack area (:func:`crack_band_energy`)."""
+"""Issue 12 gate 6, the energy released per crack area (:func:`.derive.crack_band_energy`)."""
 SCALARS.update(CRACK_SCALARS)
 
 
@@ -98,8 +98,9 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
             kr: dict | None = None, slow: dict | None = None) -> xr.Dataset:
     """The study's dataset from the runs ``outs`` {(solver, specimen, resolution): driver output},
     the modal runs ``modal`` {(csph | fem, specimen): output} of gate 2 and classic SPH's runs with
-    the kernel reduction ``kr`` {resolution: output} (specimen :data:`KERNEL_REDUCTION_SPECIMEN`)
-    and the slow impact's runs ``slow`` {key of :func:`slow_impact_tasks`: output}."""
+    the kernel reduction ``kr`` {resolution: output} (specimen
+    :data:`.ladders.KERNEL_REDUCTION_SPECIMEN`) and the slow impact's runs ``slow`` {key of
+    :func:`.slow_impact.slow_impact_tasks`: output}."""
     t_end = min(scene.t_end, QUICK_T_END) if quick else scene.t_end
     time = np.linspace(0.0, t_end, N_TIME)
     dims = ("solver", "specimen", "resolution")
@@ -206,9 +207,9 @@ def dataset(scene: RCBeam, outs: dict, solvers, res, quick: bool, modal: dict | 
 
 
 def _kernel_reduction(ds, outs: dict, kr: dict, res, time) -> None:
-    """Classic SPH on specimen :data:`KERNEL_REDUCTION_SPECIMEN` without (the main runs) and with
-    the kernel reduction of 003 §4.2(2): the ``kernel_reduction`` dimension (0: without, 1: with)
-    of the mid-span displacement history, its largest value and the run status."""
+    """Classic SPH on specimen :data:`.ladders.KERNEL_REDUCTION_SPECIMEN` without (the main runs)
+    and with the kernel reduction of 003 §4.2(2): the ``kernel_reduction`` dimension (0: without, 1:
+    with) of the mid-span displacement history, its largest value and the run status."""
     if not kr:
         return
     sp = KERNEL_REDUCTION_SPECIMEN

@@ -22,15 +22,15 @@ PAPER = {"B": dict(max_displacement=3e-3, max_displacement_kernel_reduction=6e-3
 reduction and about twice that with it (closer to the tests). 003 gives A's histories only in
 Fig. 17 (no number in the text): the residual displacement "almost the same as the experiment"."""
 TRUNCATION_MARGIN = 2e-3
-"""A history's largest value counts as its maximum only where it comes at least this long (s)
-before the run's end; nearer the end it is ``truncated``: a lower bound, never reported or gated
-as a maximum. A value still rising at t_end, or a beam running away, cannot be told from a peak
-that the next instants would confirm. 2 ms is issue 35's margin: a quarter period of the weight
-on B's elastic beam (2.1 ms; 100 kg on the static mid-span stiffness of :func:`slow_impact_stress`,
-57 MN/m: an elastic response falls from its peak back to zero in that time), so a largest value
-followed by 2 ms of the run is one the beam has turned back from. The quick
-run (:data:`QUICK_T_END`, 0.5 ms) is shorter than the margin: every largest value of it is
-truncated by construction."""
+"""A history's largest value counts as its maximum only where it comes at least this long (s) before
+the run's end; nearer the end it is ``truncated``: a lower bound, never reported or gated as a
+maximum. A value still rising at t_end, or a beam running away, cannot be told from a peak that the
+next instants would confirm. 2 ms is issue 35's margin: a quarter period of the weight on B's
+elastic beam (2.1 ms; 100 kg on the static mid-span stiffness of
+:func:`.slow_impact.slow_impact_stress`, 57 MN/m: an elastic response falls from its peak back to
+zero in that time), so a largest value followed by 2 ms of the run is one the beam has turned back
+from. The quick run (:data:`.ladders.QUICK_T_END`, 0.5 ms) is shorter than the margin: every largest
+value of it is truncated by construction."""
 LOAD_CELL_WINDOW = 1e-4
 """The window (s) of the impact force as a load cell sees it: the contact force's time mean over
 the last 0.1 ms, (I(t) − I(t − W))/W from the impulse I (the weight's change of momentum, exact
@@ -111,10 +111,10 @@ def window_mean_peak(t, impulse, window: float = LOAD_CELL_WINDOW) -> tuple:
 
 CRACK_DAMAGE = 1.0 - 1e-6
 """A mortar particle is cracked where the largest eigenvalue of its damage tensor Ω reaches 1: a
-direction with φ = 0, its normal stress fully released (an open crack, :mod:`workbench.materials.mortar`;
-the same criterion as the strain stand-in's principal strain above ε_0). The margin: Ω is raised
-to κ/ε_0 ≥ 1 along a crack axis once its normal strain κ reaches ε_0; round-off of the
-eigen-analysis only."""
+direction with φ = 0, its normal stress fully released (an open crack,
+:mod:`workbench.materials.mortar`; the same criterion as the strain stand-in's principal strain
+above ε_0). The margin: Ω is raised to κ/ε_0 ≥ 1 along a crack axis once its normal strain κ reaches
+ε_0; round-off of the eigen-analysis only."""
 
 
 def damage_tensors(history: np.ndarray) -> np.ndarray:

@@ -118,7 +118,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
 def impact_force_figure(ds: xr.Dataset, specimens, path):
     """The impact force of the finest run of each method: the penalty's instantaneous force at the
     records (thin: it rings at ~20 µs and its peak depends on the record interval) and the load
-    cell's, its :data:`LOAD_CELL_WINDOW` mean from the impulse (thick), with 003's load-cell
+    cell's, its :data:`.derive.LOAD_CELL_WINDOW` mean from the impulse (thick), with 003's load-cell
     range."""
     import matplotlib.pyplot as plt
 
@@ -148,10 +148,10 @@ def impact_force_figure(ds: xr.Dataset, specimens, path):
 
 def crack_figure(ds: xr.Dataset, path):
     """The cracked beams (as Fig. 16 and 19 of 003): the mortar particles of the finest run in the
-    symmetry plane y = 0, at their reference positions, coloured by the damage (the damage
-    tensor's largest eigenvalue; without a history the largest residual principal strain over the
-    release strain at that spacing, clipped to [0, 2]), the crack line — perpendicular to the
-    principal damage direction — drawn where the particle is cracked (:func:`crack_orientation`)."""
+    symmetry plane y = 0, at their reference positions, coloured by the damage (the damage tensor's
+    largest eigenvalue; without a history the largest residual principal strain over the release
+    strain at that spacing, clipped to [0, 2]), the crack line — perpendicular to the principal
+    damage direction — drawn where the particle is cracked (:func:`.derive.crack_orientation`)."""
     import matplotlib.pyplot as plt
 
     from ..figures import save

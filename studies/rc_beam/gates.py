@@ -57,9 +57,9 @@ evaluated."""
 
 def truncation_gate(gate: Gate, truncated: dict) -> Gate:
     """A gate that reads a largest value of a history, or several (``truncated`` {label: whether
-    that value is truncated, :func:`history_maximum`}): where any of them is truncated the gate
-    fails, not evaluated (observed NaN, :meth:`Gate.missing`), naming them — a truncated value is a
-    lower bound, never a maximum to compare."""
+    that value is truncated, :func:`.derive.history_maximum`}): where any of them is truncated the
+    gate fails, not evaluated (observed NaN, :meth:`Gate.missing`), naming them — a truncated value
+    is a lower bound, never a maximum to compare."""
     cut = [k for k, v in truncated.items() if v]
     if not cut:
         return gate

@@ -15,9 +15,9 @@ from .slow_impact import slow_note
 
 def show_largest(value: float, when: float, truncated: bool, scale: float, unit: str,
                  digits: int = 3) -> str:
-    """A largest value as the report shows it: '6.13 mm at 4.2 ms' where it is a maximum,
-    '≥ 6.13 mm (truncated at t_end)' where it came within :data:`TRUNCATION_MARGIN` of the run's
-    end (a lower bound, never a maximum)."""
+    """A largest value as the report shows it: '6.13 mm at 4.2 ms' where it is a maximum, '≥ 6.13 mm
+    (truncated at t_end)' where it came within :data:`.derive.TRUNCATION_MARGIN` of the run's end (a
+    lower bound, never a maximum)."""
     if not np.isfinite(value):
         return "n/a"
     v = f"{value * scale:.{digits}g} {unit}"

@@ -211,7 +211,7 @@ def slow_impact_stress(scene: RCBeam, velocity: float) -> float:
 
 
 def slow_impact_scene(scene: RCBeam | None = None) -> RCBeam:
-    """The particle scene of the slow impact: ``scene`` (default :class:`RCBeam`) as specimen
+    """The particle scene of the slow impact: ``scene`` (default :class:`.scene.RCBeam`) as specimen
     :data:`SLOW_SPECIMEN` struck at :data:`SLOW_VELOCITY` for :data:`SLOW_T_END`."""
     return dataclasses.replace(scene or SCENE(), specimen=SLOW_SPECIMEN, velocity=SLOW_VELOCITY,
                                t_end=SLOW_T_END, n_out=SLOW_N_OUT, structure="impact",
@@ -254,20 +254,20 @@ def _moving_mean(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
 def slow_comparison(runs: dict, window: str = "half") -> dict:
     """The slow impact's check from its runs {key of :func:`slow_impact_tasks`: output}.
 
-    Window: [0, t½], t½ where the finest FEM's mid-span displacement first returns to zero after
-    its peak (interpolated between records); ``window='quarter'``: [0, t¼], t¼ the record of the
-    FEM's peak (the run must go on past it). On a common axis of :data:`SLOW_N_TIME` points over
-    it: both histories (``csph``, ``fem``: the finest mesh at the most steps), every rung's
-    (``rungs`` {key: history}), and ``error`` = max |w_csph − w_FEM| / max w_FEM; the FEM's own
-    ``fem_mesh_error`` (the finest mesh against the next, at the most steps both ran) and
-    ``fem_time_error`` (the finest mesh at its most steps against its next fewer), the same norm. The particle run's contact: ``zero_force_fraction`` (records of the
-    window with no impact force: the chatter), ``min_mean_force`` (the smallest
-    :data:`SLOW_MEAN_WINDOW` mean of the impact force over the window, over its mean: > 0 means
-    the weight stays pressed on the plate on average), ``min_mean_support`` (the same for the
-    supports' reaction, from its first arrival), ``separation`` (the first record from which the
-    impact force stays zero, s); ``max_damage`` (mortar) and ``max_plastic_strain`` (mortar and
-    steel) at the end of the particle run; ``peak_csph``, ``peak_fem`` (m), ``status`` and
-    ``wall_time`` per run."""
+    Window: [0, t½], t½ where the finest FEM's mid-span displacement first returns to zero after its
+    peak (interpolated between records); ``window='quarter'``: [0, t¼], t¼ the record of the FEM's
+    peak (the run must go on past it). On a common axis of :data:`SLOW_N_TIME` points over it: both
+    histories (``csph``, ``fem``: the finest mesh at the most steps), every rung's (``rungs`` {key:
+    history}), and ``error`` = max |w_csph − w_FEM| / max w_FEM; the FEM's own ``fem_mesh_error``
+    (the finest mesh against the next, at the most steps both ran) and ``fem_time_error`` (the
+    finest mesh at its most steps against its next fewer), the same norm. The particle run's
+    contact: ``zero_force_fraction`` (records of the window with no impact force: the chatter),
+    ``min_mean_force`` (the smallest :data:`SLOW_MEAN_WINDOW` mean of the impact force over the
+    window, over its mean: > 0 means the weight stays pressed on the plate on average),
+    ``min_mean_support`` (the same for the supports' reaction, from its first arrival),
+    ``separation`` (the first record from which the impact force stays zero, s); ``max_damage``
+    (mortar) and ``max_plastic_strain`` (mortar and steel) at the end of the particle run;
+    ``peak_csph``, ``peak_fem`` (m), ``status`` and ``wall_time`` per run."""
     from workbench.materials import HIST_EPS_P
     from workbench.materials.mortar import H_DAMAGE, H_EPS_P
 
