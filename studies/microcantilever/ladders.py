@@ -44,15 +44,8 @@ OPTIONS_3D = {}
 """csph options of 3-D runs: none — the integration-consistent correction, as in 2-D. It needs
 every face of the body on a lattice plane (:func:`sph.csph.off_lattice_share`); the scene's block
 reaches ``block_margin`` = 5 µm beyond the beam's side faces, which puts them there at every
-H/Δx. (With the block B/2 beyond them, as before, they fell half a spacing between the planes at
-odd H/Δx: the correction grew to ten times the gradients, the critical step to 0.016 of the CFL
-estimate, the elastic slope 27 % too stiff at H/Δx = 5, and the study ran nodal integration.)
-Measured at H/Δx = 5 (3-D, one thread): critical step 2/ω_max 0.87 of the CFL estimate Δx/c_p
-(nodal 0.66); static elastic slope 8.80 and 8.48 kN/m at H/Δx = 5 and 10, +5.7 and +1.8 % from
-the 3-D FEM's limit 8.33 kN/m (the FEM itself +5.4 and +2.6 %), nodal integration 7.78 and
-7.82 kN/m, −6.5 and −6.1 % (it hardly converges: the one-sided gradients at the faces are not
-integration-consistent); the dynamic runs (compression rule) are stable, their energy balance
-within 1.4e-3 (intra) and 2.1e-4 (inter) of the external work, 98 s and 63 s."""
+H/Δx (what a block B/2 beyond them did, and the measured step, slopes and energy balance:
+``notes.md``)."""
 FEM_RESOLUTIONS = (5, 10, 20, 40, 80)
 """Elements (9-node quadrilaterals, plane strain) across H of the FEM reference of a 2-D run; the
 smallest is 5 (the grain boundary, 1 µm, must hold an element: H/h >= 5). The reference of the
@@ -77,10 +70,8 @@ path, by Newton): 1776, 12 001 and 38 176 particles; 2 s, 41 s and 4.5 minutes o
 4.1 GB at 15. The Newton systems above 20 000 unknowns are solved by AMG-preconditioned CG
 (:mod:`workbench.linear_systems`; the direct solve took 61 s per iteration at H/Δx = 10, where
 AMG-CG takes 16 s, and did not finish at 15). They run after the FEM ladder, so that the two
-largest jobs do not hold their memory at once. Measured: 8797.5, 8478.6 and 8395.6 N/m, +5.69,
-+1.86 and +0.86 % from the FEM's limit; observed order of the error 1.7 (least squares), and
-1.43 on the values alone (:func:`.derive._order3`; their own limit 8286 N/m, 0.46 % below the FEM's)
-(:func:`.gates.static_slope_gates`)."""
+largest jobs do not hold their memory at once (:func:`.gates.static_slope_gates`; the measured
+slopes: ``notes.md``)."""
 FEM_RESOLUTIONS_3D = (5, 10, 15)
 FEM_FULL_PATH_3D = (5,)
 """Gate 1 of the 3-D run (the default): the FEM of the same 3-D grains and boundaries (27-node
@@ -91,9 +82,7 @@ elements, 2.5e5 and 8.4e5 unknowns, 2.5 and 5.7 minutes, 5.9 and 13.2 GB; the Ne
 AMG-preconditioned CG, :mod:`workbench.linear_systems` — the direct solve took 8 minutes and
 12.6 GB at 10). The slope's limit is the Richardson limit of the two finest at
 :data:`.derive.SINGULAR_ORDER` (the re-entrant edge where the beam meets its block is the 2-D corner
-extruded, the same exponent); the three meshes observe the order. Measured: 8778.3, 8538.1 and
-8461.7 N/m; observed order 1.08 (the singular order 1.09); limit 8324.1 N/m (8325.0 from the
-5/10 pair)."""
+extruded, the same exponent); the three meshes observe the order (measured: ``notes.md``)."""
 FEM_STEP = 1e-3
 FEM_MAX = 0.02
 """The FEM's static path: the patch pushed down in steps of FEM_STEP·H to FEM_MAX·H (5 nm to

@@ -19,24 +19,15 @@ OPTIONS = {"sph": dict(stress="hyperelastic", viscous_work=True),
 its artificial viscosity's dissipation for the energy balance. Both methods keep mirror images
 of the neighbours across the symmetry planes (the default ``mirror='auto'``, :mod:`sph.mirror`),
 so the quarter moves as the full beam (tests/test_mirror.py). Classic SPH's velocity gradient has
-the volume m_j/ρ_i, the power conjugate of its forces (:mod:`sph.classic`): with m_j/ρ_j, as
-until 853cdd8, the full beam turned unstable under the plate from about 0.2 ms (B, 12.5 mm:
-energy balance +19 % at 0.5 ms) and the study ran the one-sided quarter (``mirror='none'``, 17 %
-off the full beam's mid-span displacement at 0.5 ms), which failed the energy balance over the
-10 ms (A 20 %, B 12.8 % at 12.5 mm) and was unstable at 10 and 8.33 mm. csph runs with nodal
-integration (the integration-consistent correction is stable only below 0.20 Δx/c_p on specimen
-A at 12.5 mm, its critical step 2/ω_max: at 0.9 of it, ``dt_reference='spectrum'``, it runs, at
-about 4 times the cost of nodal csph at 0.9 of its own critical step; tests/test_rc_beam.py)."""
+the volume m_j/ρ_i, the power conjugate of its forces (:mod:`sph.classic`; what m_j/ρ_j did:
+``notes.md``). csph runs with nodal integration (the integration-consistent correction is stable
+only below 0.20 Δx/c_p on specimen A at 12.5 mm, its critical step 2/ω_max: at 0.9 of it,
+``dt_reference='spectrum'``, it runs, at about 4 times the cost of nodal csph at 0.9 of its own
+critical step; tests/test_rc_beam.py)."""
 RESOLUTIONS = {"sph": (5, 8, 10, 12), "csph": (5, 8, 10, 12)}
 """Particles across H = 100 mm: 20, 12.5, 10 and 8.33 mm, so that each specimen's runs finish
-within the issue's 15 minutes on 2 cores. Measured from an empty run cache on 2 cores: the whole
-default run (both specimens at the four spacings with both methods, the kernel-reduction runs on
-B, the modal check and the slow impact) in 20 min 35 s with ``--scheduler local``; with the
-default serial scheduler (one thread a run under 20 000 particles) specimen A's runs at 12.5, 10
-and 8.33 mm took 758 s (sph 87, 132, 279 s; csph 51, 68, 141 s), B's 421 s, and 20 mm adds
-about 25 s to both. The paper's 5 mm is ``--resolution 20`` (classic SPH on A there, one-sided
-before 615287a: about 72 ms a step beside csph A at 5 mm, 40 000 steps; csph A 1111 s and B
-648 s), not on the default ladder."""
+within the issue's 15 minutes on 2 cores (the measured times: ``notes.md``). The paper's 5 mm is
+``--resolution 20``, not on the default ladder."""
 QUICK_RESOLUTIONS = {"sph": (8,), "csph": (8,)}
 KERNEL_REDUCTION_SPECIMEN = "B"
 """The kernel reduction of 003 §4.2(2) (classic SPH's ``kernel_reduction``: kernels across fully
