@@ -1,5 +1,5 @@
-"""Micro-cantilever study: inter- and intra-granular fracture of a ceramic micro-cantilever with
-five Voronoi grains and four grain boundaries (paper 000 §4–5, Fig. 5–6; the scene is
+"""Micro-cantilever study: inter- and intra-granular fracture of a ceramic micro-cantilever with five
+Voronoi grains and four grain boundaries (paper 000 §4–5, Fig. 5–6; the scene is
 :class:`.scene.MicroCantilever`, its choices in :mod:`.scene`).
 
 Each case (``inter``: ε_L = 0.002 on the grain boundaries; ``intra``: in the grains) runs with
