@@ -1,5 +1,7 @@
 """The studies: one module per study with ``NAME``, ``SCENE``, ``SOLVERS``, ``run(...) -> Dataset``,
-``gates(ds)``, ``errors(ds)`` (rows for accuracy against cost) and ``plot(ds, outdir)``."""
+``gates(ds)``, ``errors(ds)`` (rows for accuracy against cost) and ``plot(ds, outdir)``. A case with
+a scene of its own is a folder (``studies/rc_beam/``: scene, study, gates, figures, notes) whose
+``__init__`` exposes the same names; :data:`STUDIES` maps each study to its module."""
 from __future__ import annotations
 
 import importlib
@@ -10,7 +12,7 @@ STUDIES = {
     "plate": "studies.plate",
     "stability": "studies.stability",
     "microcantilever": "studies.microcantilever",
-    "microcantilever_root": "studies.microcantilever_root",
+    "microcantilever_root": "studies.microcantilever.root",
     "rc_beam": "studies.rc_beam",
 }
 # The studies that `workbench verify` runs, in order.

@@ -9,8 +9,8 @@ alone — particles × steps / wall time. The scenes (:data:`SCENES`):
 * ``plate`` (the default): the 2-D plate (004 D), SVK rubber; ``law='j2'`` swaps it for the
   Table 1 steel (J2, history per particle) on the same particles, for the plastic throughput;
 * ``microcantilever3d``: the 3-D micro-cantilever of paper 000 (J2 grains and grain boundaries,
-  :class:`workbench.scenes.MicroCantilever`, ``dim=3``), csph with the study's 3-D options;
-* ``rc_beam``: the reinforced mortar beam of paper 003 (:class:`workbench.scenes.RCBeam`, specimen
+  :class:`studies.microcantilever.scene.MicroCantilever`, ``dim=3``), csph with the study's 3-D options;
+* ``rc_beam``: the reinforced mortar beam of paper 003 (:class:`studies.rc_beam.scene.RCBeam`, specimen
   A, quarter model: the mortar law, J2 bars, the weight and supports in contact), sph and csph with
   the rc_beam study's options (classic SPH's list with its skin; ``sph_every_step`` searching
   every step, :data:`VARIANTS`; with contact both run the driver's generic step loop).
@@ -87,8 +87,10 @@ class SceneBody:
 
 def scene_of(name: str):
     """The scene object of a benchmark scene name (:data:`SCENES`)."""
-    from workbench.scenes import Plate, RCBeam
-    from workbench.scenes.fracture import MicroCantilever
+    from workbench.scenes import Plate
+
+    from .microcantilever.scene import MicroCantilever
+    from .rc_beam.scene import RCBeam
 
     if name == "plate":
         return Plate()
@@ -107,11 +109,11 @@ def scene_options(name: str, solver: str) -> dict:
         method, extra = VARIANTS[solver]
         return {**scene_options(name, method), **extra}
     if name == "microcantilever3d" and solver == "csph":
-        from .microcantilever import OPTIONS_3D
+        from .microcantilever.ladders import OPTIONS_3D
 
         return dict(OPTIONS_3D)
     if name == "rc_beam":
-        from .rc_beam import OPTIONS
+        from .rc_beam.ladders import OPTIONS
 
         return dict(OPTIONS.get(solver, {}))
     return {}

@@ -73,7 +73,7 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
 
 
 # -- the micro-cantilever's crack band against its closed form (issue 42 item 5) ----------------
-# The regularised rule keeps Δx·g(ε_L,eff) = b·g(ε_L) (workbench.scenes.fracture.crack_band_limit),
+# The regularised rule keeps Δx·g(ε_L,eff) = b·g(ε_L) (studies.microcantilever.scene.crack_band_limit),
 # so a straight column of failed particles across the section takes the band's closed form
 # G_c = b·g(ε_L)·H (workbench.analytic.crack_band_energy; g integrated from the law). What a run
 # carries beyond it are the particles outside that column — the surface particle beside the
@@ -114,7 +114,7 @@ def microcantilever_band_closed_form(attrs: dict, case: str, band: float) -> flo
     import dataclasses
 
     from workbench.analytic import crack_band_energy
-    from workbench.scenes.fracture import MicroCantilever
+    from .microcantilever.scene import MicroCantilever
 
     names = {f.name for f in dataclasses.fields(MicroCantilever) if f.init} - {"name"}
     params = {k[len("param_"):]: v.item() if hasattr(v, "item") else v  # numpy scalars: Python's

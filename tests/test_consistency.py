@@ -189,7 +189,7 @@ def test_microcantilever_3d_faces_on_the_lattice_and_a_well_posed_correction(r):
     too: csph takes the integration-consistent correction, and it is a correction — the largest
     change of a gradient below the largest gradient (0.15 measured; with the beam's side faces half
     a spacing between planes, 10.8 at H/Δx = 5 and 17.6 at 7)."""
-    from workbench.scenes.fracture import MicroCantilever
+    from studies.microcantilever.scene import MicroCantilever
 
     sc = MicroCantilever()
     model, _ = driver.model_at(sc, r)
@@ -205,7 +205,7 @@ def test_faces_between_lattice_planes_take_nodal_integration():
     between lattice planes at H/Δx = 5: a quarter of the boundary): 'auto' takes nodal
     integration; 'consistent', asked for, is built and says so, and its correction is ill-posed
     there — larger than the gradients it corrects (10.8 measured)."""
-    from workbench.scenes.fracture import MicroCantilever
+    from studies.microcantilever.scene import MicroCantilever
 
     sc = MicroCantilever(block_margin=MicroCantilever().B / 2)
     model, _ = driver.model_at(sc, 5)
@@ -222,7 +222,7 @@ def test_microcantilever_3d_consistent_time_step():
     """The highest frequency of the consistent 3-D micro-cantilever (H/Δx = 5) is that of a lattice
     of its spacing: its critical step 2/ω_max at least half the CFL estimate Δx/c_p (0.87 measured,
     nodal integration 0.66, the 2-D body 1.02; with the side faces between lattice planes 0.016)."""
-    from workbench.scenes.fracture import MicroCantilever
+    from studies.microcantilever.scene import MicroCantilever
 
     steps = driver.scene_time_steps("csph", MicroCantilever(), 5)
     assert steps["dt_crit"] / steps["dt_cfl"] > 0.5, steps

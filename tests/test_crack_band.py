@@ -18,15 +18,15 @@ import math
 import numpy as np
 import pytest
 
-from studies import rc_beam
+from studies.rc_beam.ladders import OPTIONS as RC_OPTIONS
 from studies.common import observed_order
 from studies.crack_band import crack_band
 from workbench.scenes.crack_band import MortarBar
-from workbench.scenes.rc_beam import PAPER_SPACING
+from workbench.materials.mortar_constants import PAPER_SPACING
 
 RESOLUTIONS = (4, 6, 8)
 """Particles across B = 20 mm: 5 (003's spacing), 3.33 and 2.5 mm."""
-OPTIONS = rc_beam.OPTIONS
+OPTIONS = RC_OPTIONS
 """The solvers as the RC beam study runs them: csph with nodal integration, classic SPH with the
 hyperelastic stress path (and its viscous work tracked). (The integration-consistent csph, the
 default: 2.061 / 2.045 / 2.036 G_F — the columns beside the band keep 2–4 % partial damage.)"""
@@ -175,9 +175,9 @@ def test_rc_beam_energy_per_crack_area_of_a_constructed_band():
     energy W': the ratio grows by W'/W, the fully released share is W/(W + W')."""
     from sph.driver import model_at
     from sph.particles import discretise
-    from studies.rc_beam import crack_band_energy
+    from studies.rc_beam.derive import crack_band_energy
     from workbench.materials.mortar import H_DAMAGE, H_W_RELEASED, N_HISTORY, fracture_energy
-    from workbench.scenes import RCBeam
+    from studies.rc_beam import RCBeam
 
     s = RCBeam(specimen="B")
     model, dx = model_at(s, 8)

@@ -73,7 +73,7 @@ def test_quadrature_points_take_the_region_the_geometry_gives_them():
     lies within half the thickness of the bisector of its two nearest seeds — (d₂² − d₁²) /
     (2 |s₂ − s₁|) ≤ t/2 — whatever its element's centroid says, and there are such points whose
     element the mesh draws in the other region (the staircase the point reading avoids)."""
-    from workbench.scenes.fracture import MicroCantilever
+    from studies.microcantilever.scene import MicroCantilever
 
     sc = MicroCantilever(dim=2)
     fm = build(sc, 5)

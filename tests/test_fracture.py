@@ -14,7 +14,7 @@ from sph import driver, total_lagrangian as tl
 from sph.csph import CSPH
 from sph.particles import of_arrays
 from workbench.materials import Material
-from workbench.scenes.fracture import MicroCantilever
+from studies.microcantilever.scene import MicroCantilever
 
 J2 = dict(E=200e9, nu=0.3, C=868.8e6, eps0=0.0013, n=0.179, rho=7974.0)
 
@@ -345,7 +345,7 @@ def test_the_cut_does_not_depend_on_how_long_the_run_goes_on(run2d):
     records the cut: the same time and the same state at it as the run that stopped t_after
     later (the records fall at the same steps: the same t_end), so the crack's energy measured
     there (studies.microcantilever.fracture_energy) is the same."""
-    from studies.microcantilever import fracture_energy
+    from studies.microcantilever.derive import fracture_energy
 
     t_end = MicroCantilever().t_end
     out = driver.solve("csph", MicroCantilever(dim=2, t_after=0.0), 5)

@@ -12,7 +12,7 @@ import pytest
 
 from workbench import analytic
 from workbench.materials import HIST_DAMAGE, HIST_EPS_P, HIST_W_P, HIST_W_REL, Material, evaluate
-from workbench.scenes.fracture import MicroCantilever, band_energy_density
+from studies.microcantilever.scene import MicroCantilever, band_energy_density
 
 SCENE = MicroCantilever(dim=2)
 GRAINS, GB = SCENE.materials(SCENE.H / 10)

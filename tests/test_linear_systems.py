@@ -126,9 +126,11 @@ def test_csph_static_3d_is_the_same_with_amg(monkeypatch):
     tolerance (1e-8), though Newton solves its systems inexactly: the first iteration of a step
     to the loosest forcing term (FORCING_MAX), the last ones tighter."""
     import sph.static as st
-    import studies.microcantilever as mc
+    from studies.microcantilever import MicroCantilever
+    from studies.microcantilever.ladders import FEM_STEP
+    from studies.microcantilever.static import csph_static
 
-    sc = mc.MicroCantilever(dim=3)
+    sc = MicroCantilever(dim=3)
     slope = {}
     calls = []
     real = ls.solve_symmetric
@@ -143,7 +145,7 @@ def test_csph_static_3d_is_the_same_with_amg(monkeypatch):
     for amg in (False, True):
         monkeypatch.setitem(ls.AMG_ABOVE, 3, 0 if amg else 10 ** 9)
         calls.clear()
-        slope[amg] = mc.csph_static(sc, 5, fem_max=mc.FEM_STEP)["elastic_slope"]
+        slope[amg] = csph_static(sc, 5, fem_max=FEM_STEP)["elastic_slope"]
         assert calls and all(("direct" in c) != amg for c in calls), calls
     rtols = [c["rtol"] for c in calls]
     assert max(rtols) == ls.FORCING_MAX and min(rtols) < 1e-2 * ls.FORCING_MAX, rtols

@@ -1,10 +1,10 @@
-"""The micro-cantilever study (studies/microcantilever.py) at its quick setting and the scene's bad
+"""The micro-cantilever study (studies/microcantilever/) at its quick setting and the scene's bad
 input: one line naming the parameter and its allowed range, exit status 2 from the command line."""
 import numpy as np
 import pytest
 
 from sph import driver
-from workbench.scenes.fracture import MicroCantilever
+from studies.microcantilever.scene import MicroCantilever
 from workbench.scenes.params import ParameterError, SceneError
 
 
@@ -39,9 +39,10 @@ def test_a_run_is_validated_on_its_own_ladder():
     one for the 3-D scene (the 2-D ladder's H/Δx = 20 in 3-D would need about 25 GB and was
     refused), the 2-D one in 2-D."""
     from studies import common, microcantilever as mc
+    from studies.microcantilever.ladders import RESOLUTIONS_3D
 
     _, lads = common.validate(mc, MicroCantilever())
-    assert lads == {"csph": list(mc.RESOLUTIONS_3D)}
+    assert lads == {"csph": list(RESOLUTIONS_3D)}
     _, lads = common.validate(mc, MicroCantilever(dim=2))
     assert lads == {"csph": list(mc.RESOLUTIONS["csph"])}
 
@@ -155,7 +156,7 @@ def test_material_code_against_closed_form(case):
 def test_richardson_limit_and_first_failure_interpolation():
     """The two helpers of gate 1 against closed forms: the Richardson limit of S = S∞ + C h^p is
     S∞ exactly; the first crossing of D = 1 is found by linear interpolation."""
-    from studies.microcantilever import SINGULAR_ORDER, first_failure, fem_slope_limit
+    from studies.microcantilever.derive import SINGULAR_ORDER, fem_slope_limit, first_failure
 
     res = (5, 10, 20)
     S = [2.0 + 3.0 * (1.0 / r) ** SINGULAR_ORDER for r in res]
@@ -169,7 +170,8 @@ def test_richardson_limit_and_first_failure_interpolation():
 
 @pytest.fixture(scope="module")
 def fem_quick():
-    from studies.microcantilever import FEM_MAX_ROOT, QUICK_FEM_RESOLUTIONS, fem_ladder
+    from studies.microcantilever.ladders import FEM_MAX_ROOT, QUICK_FEM_RESOLUTIONS
+    from studies.microcantilever.static import fem_ladder
 
     # the path of gate 2 (to 0.3 µm): the first failures in the root region on both meshes
     return fem_ladder(MicroCantilever(dim=2), QUICK_FEM_RESOLUTIONS, FEM_MAX_ROOT)
@@ -180,7 +182,7 @@ def test_fem_ladder_converges_at_the_singular_order(fem_quick):
     towards its limit (the compliance of the re-entrant corners converges from the stiff side),
     the window of the csph fit is elastic on both meshes, and both cases fail first where the
     low ε_L is. The slope's observed order over H/h = 5, 10, 20 is the singular order's."""
-    from studies.microcantilever import SINGULAR_ORDER
+    from studies.microcantilever.derive import SINGULAR_ORDER
 
     S = fem_quick["slopes"]
     assert np.all(np.isfinite(S)) and S[1] < S[0]
@@ -196,7 +198,8 @@ def test_fem_ladder_converges_at_the_singular_order(fem_quick):
     # within its pre-asymptotic band (measured 1.26; a mesh error of the order h² or a
     # non-converging h^0.5 falls outside it). (It replaces an algebraic identity of the
     # Richardson formula, which held whatever the order.)
-    from studies.microcantilever import FEM_MAX_ROOT, fem_ladder
+    from studies.microcantilever.ladders import FEM_MAX_ROOT
+    from studies.microcantilever.static import fem_ladder
 
     S3 = fem_ladder(MicroCantilever(dim=2), (5, 10, 20), FEM_MAX_ROOT, full=(5,))["slopes"]
     np.testing.assert_allclose(S3[:2], S, rtol=1e-9)
@@ -215,8 +218,11 @@ def test_ladder_with_first_points_only_and_its_3d_variables(fem_quick):
     gate 1's FEM check."""
     import dataclasses
 
-    from studies.microcantilever import (CASES, FEM_MAX_ROOT, dataset, fem_ladder, gates,
-                                         report_notes)
+    from studies.microcantilever.dataset import dataset
+    from studies.microcantilever.gates import gates
+    from studies.microcantilever.ladders import CASES, FEM_MAX_ROOT
+    from studies.microcantilever.report import report_notes
+    from studies.microcantilever.static import fem_ladder
 
     part = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,))
     np.testing.assert_allclose(part["slopes"], fem_quick["slopes"], rtol=1e-9)
@@ -271,7 +277,8 @@ def test_root_path_stops_after_both_first_failures(fem_quick):
     path points is second order in the step, and four times the fine path's last step costs
     0.03 % (inter) and 0.11 % (intra) at H/h = 10 (studies.microcantilever.ROOT_LADDER_STEP); a
     path that stopped one point early has no failure at all (NaN)."""
-    from studies.microcantilever import CASES, FEM_MAX_ROOT, fem_ladder, root_ladder_path
+    from studies.microcantilever.ladders import CASES, FEM_MAX_ROOT
+    from studies.microcantilever.static import fem_ladder, root_ladder_path
 
     lad = fem_ladder(MicroCantilever(dim=2), (5, 10), FEM_MAX_ROOT, full=(5,), root_path=True)
     np.testing.assert_allclose(lad["slopes"], fem_quick["slopes"], rtol=1e-9)
@@ -298,7 +305,9 @@ def test_csph_elastic_slope_against_the_fem(fem_quick):
     1 % of the FEM's limit): a three-fold regression fails."""
     import dataclasses
 
-    from studies.microcantilever import csph_slope, scene_for, slope_tolerance
+    from studies.microcantilever.derive import csph_slope
+    from studies.microcantilever.gates import slope_tolerance
+    from studies.microcantilever.ladders import scene_for
 
     sc = dataclasses.replace(scene_for(MicroCantilever(dim=2), "inter", "compression"), t_end=4e-7)
     out = driver.solve("csph", sc, 5, crack="visibility")
@@ -320,8 +329,9 @@ def test_first_failure_in_the_root_region(fem_quick):
     (the secant at its first path point, elastic, as the FEM's) is within gate 1's tolerance at
     H/Δx = 5 (13 % from these two meshes; csph is 8 % from their limit, 1.8 % above the FEM at
     H/h = 5)."""
-    from studies.microcantilever import (SINGULAR_ORDER, TOL_FIRST_FAILURE, csph_static,
-                                         root_ladder_path, slope_tolerance)
+    from studies.microcantilever.derive import SINGULAR_ORDER
+    from studies.microcantilever.gates import TOL_FIRST_FAILURE, slope_tolerance
+    from studies.microcantilever.static import csph_static, root_ladder_path
 
     st = csph_static(MicroCantilever(dim=2), 5)
     assert st["status"] == "ok"
@@ -355,7 +365,7 @@ def test_the_3d_root_region_keeps_clear_of_the_re_entrant_edges():
     """In 3-D the root region leaves out a cylinder of radius EDGE_CLEARANCE·H about each edge
     where a side face of the beam meets the block (x = 0, y = ±B/2), a singular line; in 2-D
     (no such edge) the region is the tension half of the root half alone."""
-    from studies.microcantilever import EDGE_CLEARANCE, root_region
+    from studies.microcantilever.static import EDGE_CLEARANCE, root_region
 
     sc = MicroCantilever()
     d = EDGE_CLEARANCE * sc.H
@@ -376,7 +386,7 @@ def test_limit_spread_of_a_richardson_limit():
     """limit_spread: zero for values converging exactly at the singular order; for values
     converging at another order q, |L(p) − L|/L(p) with L(p) the singular-order extrapolation of
     the two finest (closed form below); NaN below three meshes or without an observed order."""
-    from studies.microcantilever import SINGULAR_ORDER, fem_slope_limit, limit_spread
+    from studies.microcantilever.derive import SINGULAR_ORDER, fem_slope_limit, limit_spread
 
     res = np.array([5, 10, 20, 40])
     assert limit_spread(res, 100 + 30 * res ** -SINGULAR_ORDER) == pytest.approx(0, abs=1e-12)
@@ -393,7 +403,7 @@ def test_observed_order_of_three_meshes_at_any_ratio():
     """_order3: the order of values converging exactly as r^-p, for a constant ratio (closed
     form) and for 5, 10, 15 (a root of the ratio equation); NaN where the differences change
     sign or no positive order fits."""
-    from studies.microcantilever import _order3
+    from studies.microcantilever.derive import _order3
 
     for res in ((5, 10, 20), (5, 10, 15), (4, 7, 15)):
         r = np.array(res, float)
@@ -415,7 +425,7 @@ def test_static_slope_gates(errors, passed):
     uncertainty is at most half of that."""
     import xarray as xr
 
-    from studies.microcantilever import static_slope_gates
+    from studies.microcantilever.gates import static_slope_gates
 
     sr = [5, 10, 15]
     ds = xr.Dataset(coords={"static_resolution": sr, "fem_resolution": [5, 10, 15]})
@@ -430,7 +440,7 @@ def test_static_slope_gates(errors, passed):
 
 def test_static_ladder_reaches_the_finest_resolution():
     """Gate 2's static runs: the run's resolutions and STATIC_FINEST (40), whatever the ladder."""
-    from studies.microcantilever import STATIC_FINEST, static_resolutions
+    from studies.microcantilever.ladders import STATIC_FINEST, static_resolutions
 
     assert STATIC_FINEST == 40
     assert static_resolutions((5, 10, 20)) == [5, 10, 20, 40]
@@ -450,7 +460,7 @@ def test_finest_gates(slope, root, spread, status, passed):
     most half of it; a failed or missing finest run fails, it is not left out."""
     import xarray as xr
 
-    from studies.microcantilever import finest_gates
+    from studies.microcantilever.gates import finest_gates
 
     sr = [5, 10, 20, 40]
     ds = xr.Dataset(coords={"case": ["inter", "intra"], "static_resolution": sr})
@@ -471,7 +481,9 @@ def test_root_variables_on_their_own_coordinate():
     r^-1.5 read back 1.5; a run that has yielded at its first point has no slope (NaN)."""
     import xarray as xr
 
-    from studies.microcantilever import CASES, _root_variables, _static_variables, finest_gates
+    from studies.microcantilever.dataset import _root_variables, _static_variables
+    from studies.microcantilever.gates import finest_gates
+    from studies.microcantilever.ladders import CASES
 
     sr = [5, 10, 20, 40]
     lim, slim = 180.0, 1.6e9
@@ -502,7 +514,7 @@ def test_energy_balance_and_quasi_static_measures():
     kinetic/elastic ratio (closed forms), the balance error is the largest |W − ΣE|/W over the
     records (from the first with W > 0) and the ratio the largest K/E over the second half of
     the time to the first failure."""
-    from studies.microcantilever import run_summary
+    from studies.microcantilever.derive import run_summary
 
     t = np.linspace(0.0, 5e-6, 401)
     W = 1e-9 * (t / t[-1]) ** 2
@@ -523,7 +535,7 @@ def test_quasi_static_window_starts_after_the_ramp(t_first, expected):
     """Gate 4's window starts at the end of the velocity ramp (t_ramp = 0.5 µs) when the first
     failure comes after it: a K/E of 2 % inside the ramp (the start-up transient) is not read, the
     0.2 % after it is; a failure within the ramp keeps the second half of the time to it."""
-    from studies.microcantilever import run_summary
+    from studies.microcantilever.derive import run_summary
 
     scene = MicroCantilever(dim=2)
     assert scene.t_ramp == pytest.approx(0.5e-6)
@@ -553,7 +565,7 @@ def test_crack_band_limit_keeps_the_energy_per_crack_area():
     under the uniaxial Swift curve to failure (to the bisection's 1e-12, checked at 1e-9); ε_L
     itself where the spacing is the band; each grain its own modulus; the band below
     spacing·g(0)/g(ε_L) refused with one line naming ``band``."""
-    from workbench.scenes.fracture import TABLE2_E, crack_band_limit
+    from studies.microcantilever.scene import TABLE2_E, crack_band_limit
     from workbench.materials import Material
 
     sc = MicroCantilever(dim=2, case="intra", band=1e-6)
@@ -598,7 +610,7 @@ def test_fracture_energy_of_the_main_crack():
     11 at x = 2 µm stepping sideways once, against a patch of 3 at the top near x = 8 µm; its
     energy is Σ V (W_p + W_rel) over it plus what cut pairs released (the run's released energy
     less Σ V W_rel), in closed form."""
-    from studies.microcantilever import crack_particles, fracture_energy
+    from studies.microcantilever.derive import crack_particles, fracture_energy
 
     dx = 0.5e-6
     crack = [(4, j) for j in range(6)] + [(5, j) for j in range(6, 11)]
@@ -617,7 +629,7 @@ def test_fracture_energy_at_the_separation():
     ``at_separation``): a particle that fails later (here one at the top face beside the crack,
     after the cut) is left out, and the released energy is the one then; ``at='end'`` takes the
     final state; without a separation the final state is the crack's."""
-    from studies.microcantilever import fracture_energy
+    from studies.microcantilever.derive import fracture_energy
     from workbench.materials import HIST_W_P
 
     dx = 0.5e-6
@@ -644,8 +656,9 @@ def test_band_gate():
     back (G ∝ Δx exactly: 1)."""
     import xarray as xr
 
-    from studies.microcantilever import (band_gates, band_ladder, fracture_ladder, fracture_note,
-                                         spacing_power)
+    from studies.microcantilever.derive import band_ladder, fracture_ladder, spacing_power
+    from studies.microcantilever.gates import band_gates
+    from studies.microcantilever.report import fracture_note
 
     res = np.array([5, 10, 15, 20])
 
@@ -679,7 +692,7 @@ def test_band_gate():
 def test_deletion_summary_counts_the_deleted_elements_by_region():
     """Gate 6's measure for the FEM with element deletion: the deleted elements per region and
     their share where the case's low ε_L is (the boundaries for inter, the grains for intra)."""
-    from studies.microcantilever import deletion_summary
+    from studies.microcantilever.derive import deletion_summary
 
     names = ["grain0", "grain1", "gb01"]
     region = np.array([0, 0, 2, 2, 1, 1, 2])
@@ -695,7 +708,7 @@ def test_background_process_returns_and_ends():
     comes back, and closing it ends the process."""
     import operator
 
-    from studies.microcantilever import _Background
+    from studies.microcantilever.study import _Background
 
     job = _Background(operator.add, 2, 3)
     try:
@@ -715,7 +728,8 @@ def test_background_process_that_dies_is_a_result_not_a_hang():
 
     import xarray as xr
 
-    from studies.microcantilever import BackgroundFailed, _Background, gates
+    from studies.microcantilever.gates import gates
+    from studies.microcantilever.study import BackgroundFailed, _Background
 
     job = _Background(time.sleep, 30.0)
     try:
@@ -771,7 +785,9 @@ def test_slope_off_the_ladder_against_the_fem_of_the_same_model(fem_quick):
     H/h = 5 and 10). They agree to 1.9 % with the nearest-line ends; with the ends inside the patch
     (before patch_edges) csph's end particles stood 0.83 µm apart and its slope was 32 % below the
     FEM's, which kept nodes 1.67 µm apart at its spacing h/2."""
-    from studies.microcantilever import FEM_STEP, csph_static, fem_static, slope_tolerance
+    from studies.microcantilever.gates import slope_tolerance
+    from studies.microcantilever.ladders import FEM_STEP
+    from studies.microcantilever.static import csph_static, fem_static
 
     sc = MicroCantilever(dim=2)
     st = csph_static(sc, 6, fem_max=FEM_STEP)
@@ -792,7 +808,7 @@ def test_the_root_ladder_runs_from_the_command_line_and_gates_its_own_runs(tmp_p
     30/14 % and 26/12 %), and whose gates at the finest fail with two meshes: no observed order,
     so no uncertainty of the limit (NaN), and H/Δx = 10 is not within the issue's 3 %. Its
     figure, its accuracy-against-cost rows (csph and the FEM per case) and its report notes."""
-    from studies import microcantilever_root as study
+    from studies.microcantilever import root as study
     from workbench import results
     from app import cli
 
@@ -828,7 +844,8 @@ def test_crack_map_draws_every_particle(monkeypatch, tmp_path):
     matplotlib.use("Agg")
     import xarray as xr
 
-    from studies import figures, microcantilever as mc
+    from studies import figures
+    from studies.microcantilever.figures import cracked
 
     figs = []
     monkeypatch.setattr(figures, "save", lambda fig, path: figs.append(fig) or path)
@@ -851,7 +868,7 @@ def test_crack_map_draws_every_particle(monkeypatch, tmp_path):
              particle_resolution=(("case", "rule"), np.full((2, 1), 5))),
         coords=dict(case=["inter", "intra"], rule=["compression"]),
         attrs=dict(region_names="grain0", param_H=5e-6, plane="strain"))
-    mc.cracked(ds, tmp_path / "cracks.png")
+    cracked(ds, tmp_path / "cracks.png")
     (fig,) = figs
     panels = [ax for ax in fig.axes if ax.collections]
     assert len(panels) == 2
@@ -866,7 +883,7 @@ def test_fragment_measures():
     """fragment_measures: the largest speed of the failed particles and their kinetic energy
     Σ ½ ρ V |v|² over the released energy, by hand on three particles (two failed); NaN without
     velocities."""
-    from studies.microcantilever import fragment_measures
+    from studies.microcantilever.derive import fragment_measures
 
     sc = MicroCantilever(dim=2)
     out = dict(v=np.array([[3.0, 4.0], [0.0, 1.0], [9.0, 9.0]]), volume=np.array([2e-12, 1e-12, 1e-12]),

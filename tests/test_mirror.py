@@ -12,7 +12,7 @@ from sph import driver
 from sph.csph import build
 from sph.mirror import full_particles, symmetry_planes
 from sph.particles import TOL, discretise
-from workbench.scenes.rc_beam import RCBeam
+from studies.rc_beam.scene import RCBeam
 from workbench.scenes.verification import BiMaterialBar
 
 # The quarter with mirror images evaluates the full body's stencils with the full body's

@@ -18,12 +18,13 @@ from hypothesis import strategies as st
 
 import studies
 from studies import common
+from studies.microcantilever import MicroCantilever
+from studies.rc_beam import RCBeam
 from workbench import results
-from workbench.scenes import (FRACTURE_SCENES, SCENES, STABILITY_SCENES, VERIFICATION_SCENES,
+from workbench.scenes import (SCENES, STABILITY_SCENES, VERIFICATION_SCENES,
                               ParameterError, with_overrides)
-from workbench.scenes.fracture import MicroCantilever
 
-ALL_SCENES = {**SCENES, **STABILITY_SCENES, **VERIFICATION_SCENES, **FRACTURE_SCENES,
+ALL_SCENES = {**SCENES, **STABILITY_SCENES, **VERIFICATION_SCENES, "rc_beam": RCBeam,
               "microcantilever": MicroCantilever}
 SETTINGS = settings(max_examples=25, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])

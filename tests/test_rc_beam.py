@@ -1,4 +1,4 @@
-"""The reinforced mortar beam of 003 (workbench/scenes/rc_beam.py): bad input, the quarter model's
+"""The reinforced mortar beam of 003 (studies/rc_beam/scene.py): bad input, the quarter model's
 particles against closed forms, and a short coarse impact through the particle driver (momentum
 through the first contact, contact forces equal and opposite, no NaN)."""
 import dataclasses
@@ -10,8 +10,8 @@ import pytest
 from sph import driver
 from sph.contact import contact_forces
 from sph.particles import discretise
-from workbench.scenes import ParameterError, RCBeam
-from workbench.scenes.rc_beam import D10_AREA, bar_lines, staircase
+from studies.rc_beam.scene import D10_AREA, RCBeam, bar_lines, staircase
+from workbench.scenes import ParameterError
 
 
 # -- bad input: one line naming the parameter and its range ---------------------------------------
@@ -158,7 +158,8 @@ def test_consistent_csph_is_stable_below_its_critical_step(consistent_a):
     at 1.2 Δt_crit it grows exponentially within a few tens of steps (the central-difference
     amplification of the highest mode above ω Δt = 2: measured 38 steps), so the step that
     separates the two is the spectrum's, within (0.9, 1.2)."""
-    from studies.rc_beam import TOL_ENERGY, energy_error
+    from studies.rc_beam.derive import energy_error
+    from studies.rc_beam.gates import TOL_ENERGY
 
     runs, dt_cfl = consistent_a
     ok, bad = runs[0.9], runs[1.2]

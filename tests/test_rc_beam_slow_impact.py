@@ -1,4 +1,4 @@
-"""Gate 2, second half (studies/rc_beam.py, ``slow_impact``): an impact too slow to crack
+"""Gate 2, second half (studies/rc_beam/slow_impact.py): an impact too slow to crack
 anything, csph's mid-span history against the FEM's (studies.rc_beam.SlowImpactFem: the weight a
 mass on the plate's top face, hinges at the support blocks' inner columns)."""
 import dataclasses
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from workbench.scenes import RCBeam
+from studies.rc_beam import RCBeam
 
 
 # -- the FEM's model is the particles' geometry ---------------------------------------------------
@@ -22,7 +22,7 @@ def test_fem_regions_are_the_particles_cells(resolution):
     through every region face, so the volumes do not depend on it."""
     from fem_reference.model import build
     from sph.particles import discretise
-    from studies.rc_beam import SlowImpactFem, slow_impact_scene
+    from studies.rc_beam.slow_impact import SlowImpactFem, slow_impact_scene
 
     sc = dataclasses.replace(slow_impact_scene(), specimen="B")
     dx = sc.H / resolution
@@ -50,8 +50,8 @@ def test_velocity_estimate_is_the_timoshenko_beam_under_the_weight():
     under a central load (bending + shear, κ = 5/6), the 100 kg weight meeting its static
     stiffness; and SLOW_VELOCITY keeps the bottom stress under a third of the mortar's tensile
     strength (room for the contact's force peaks, 2-3 times its smooth value)."""
-    from studies.rc_beam import SLOW_VELOCITY, slow_impact_scene, slow_impact_stress
-    from workbench.scenes.rc_beam import D10_AREA
+    from studies.rc_beam.slow_impact import SLOW_VELOCITY, slow_impact_scene, slow_impact_stress
+    from studies.rc_beam.scene import D10_AREA
 
     b, h, L, n, As = 0.075, 0.1, 0.8, 206e9 / 11.9e9, 2 * D10_AREA
     zc = (b * h * h / 2 + (n - 1) * As * 0.02) / (b * h + (n - 1) * As)
@@ -90,7 +90,7 @@ def test_slow_comparison_of_known_histories():
     over the window to the trapezoid's end effects (a 1 ms mean spans 20 records, nearly whole
     periods of the every-third-record chatter); a constant support reaction's means equal it; no
     history of damage. The quarter window ends at the peak's record (T/2 to a record)."""
-    from studies.rc_beam import slow_comparison
+    from studies.rc_beam.slow_impact import slow_comparison
 
     T, delta, eps = 0.01, 0.02, 0.001
     c = slow_comparison(_runs(T=T, delta=delta, step=eps))
@@ -115,20 +115,22 @@ def test_dataset_variables_and_gates_of_the_slow_impact():
     the four gates (history, elastic, weight and supports pressed) passing at δ = 2 % < 5 %,
     the history's failing at δ = 6 %; a separated weight fails its gate."""
     from studies import rc_beam
+    from studies.rc_beam.dataset import dataset
+    from studies.rc_beam.slow_impact import slow_gates
 
     scene = RCBeam(t_end=2.5e-4, n_out=50)
     for delta, ok in ((0.02, True), (0.06, False)):
-        ds = rc_beam.dataset(scene, {}, ["csph"], [8], quick=False, slow=_runs(delta=delta))
+        ds = dataset(scene, {}, ["csph"], [8], quick=False, slow=_runs(delta=delta))
         for v in ("slow_csph_displacement", "slow_fem_displacement", "slow_fem_rungs"):
             assert "slow_time" in ds[v].dims and "units" in ds[v].attrs
-        g = rc_beam.slow_gates(ds)
+        g = slow_gates(ds)
         assert len(g) == 4 and g[0].passed == ok and all(x.passed for x in g[1:])
         assert any("slow impact" in gate.name for gate in rc_beam.gates(ds))
         assert any("slow impact" in n for n in rc_beam.report_notes(ds))
     runs = _runs()
     runs[("csph", 8, 0)]["impact_force"] = np.where(runs[("csph", 8, 0)]["time"] < 0.005, 300.0, 0.0)
-    ds = rc_beam.dataset(scene, {}, ["csph"], [8], quick=False, slow=runs)
-    assert not rc_beam.slow_gates(ds)[2].passed
+    ds = dataset(scene, {}, ["csph"], [8], quick=False, slow=runs)
+    assert not slow_gates(ds)[2].passed
 
 
 # -- the check itself, cheaply ---------------------------------------------------------------------
@@ -142,7 +144,7 @@ def test_slow_impact_follows_the_fem_to_the_peak():
     the plate on average (the smallest 1 ms mean of the impact force positive) while the contact
     chatters (some records without force).
 
-    Tolerance: the gate's budget (studies/rc_beam.py, TOL_SLOW) over a quarter period: the
+    Tolerance: the gate's budget (studies/rc_beam/slow_impact.py, TOL_SLOW) over a quarter period: the
     FEM's own error at this mesh and step (with the stirrups, against the gate's reference, 8
     elements and 400 steps: 1.0 % of the peak over this window, mostly the step), csph's
     stiffness (A's first frequency 0.9 % high at 12.5 mm: a phase error at a quarter period of
@@ -151,7 +153,8 @@ def test_slow_impact_follows_the_fem_to_the_peak():
     window; with the FEM's own error there, 4.4 %). csph's present difference is 3.7 % of the
     peak: a threefold error fails."""
     from studies.common import run_solver
-    from studies.rc_beam import TOL_SLOW, slow_comparison, slow_impact_scene, slow_impact_tasks
+    from studies.rc_beam.slow_impact import (TOL_SLOW, slow_comparison, slow_impact_scene,
+                                             slow_impact_tasks)
 
     sc = dataclasses.replace(slow_impact_scene(), stirrups=False, t_end=5.3e-3)
     tasks = slow_impact_tasks(sc, fem_resolutions=(4,), steps=(200,))

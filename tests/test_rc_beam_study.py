@@ -1,4 +1,4 @@
-"""The RC beam study (studies/rc_beam.py): conservation (issue 12 gate 3) on short coarse impacts,
+"""The RC beam study (studies/rc_beam/): conservation (issue 12 gate 3) on short coarse impacts,
 the energy terms it needs (the mortar's plastic and released work in both methods, classic SPH's
 artificial-viscosity dissipation), the dataset contract, and bad input from the command line."""
 from dataclasses import replace as dataclasses_replace
@@ -6,7 +6,8 @@ from dataclasses import replace as dataclasses_replace
 import numpy as np
 import pytest
 
-from workbench.scenes import ParameterError, RCBeam
+from studies.rc_beam import RCBeam
+from workbench.scenes import ParameterError
 
 
 # -- bad input: one line naming the parameter and its range, exit status 2 ----------------------
@@ -126,7 +127,7 @@ def short_b():
     supports 200 mm away (the bar's steel P wave in 34 µs, the mortar's in ~90 µs), the supports
     pushing back. One run per method (a few seconds each on one core)."""
     from sph import driver
-    from studies.rc_beam import OPTIONS
+    from studies.rc_beam.ladders import OPTIONS
 
     s = RCBeam(specimen="B", t_end=2.5e-4, n_out=50)
     return {m: driver.solve(m, s, 8, **OPTIONS[m]) for m in ("sph", "csph")}
@@ -137,7 +138,8 @@ def test_momentum_changes_by_the_supports_impulse(short_b, method):
     """z momentum of weight plus beam minus its initial value equals the impulse of the force
     holding the supports, Σ R Δt (studies.rc_beam.TOL_MOMENTUM: round-off), while that impulse is
     not small (> 1e-4 of the weight's momentum, so an unbalanced contact force would show)."""
-    from studies.rc_beam import TOL_MOMENTUM, momentum_error
+    from studies.rc_beam.derive import momentum_error
+    from studies.rc_beam.gates import TOL_MOMENTUM
 
     out = short_b[method]
     assert out["status"] == "ok"
@@ -154,7 +156,8 @@ def test_energy_balance_within_two_percent(short_b, method):
     is shorter still) over the run, with the mortar
     cracking (released energy > 0) and, in sph, the viscosity dissipating (here 1.8 % of the
     kinetic energy: its own correctness is test_viscous_work_closes_the_kinetic_energy_of_a_viscous_gas)."""
-    from studies.rc_beam import TOL_ENERGY, TOL_ENERGY_QUICK, energy_error
+    from studies.rc_beam.derive import energy_error
+    from studies.rc_beam.gates import TOL_ENERGY, TOL_ENERGY_QUICK
 
     out = short_b[method]
     e0 = float(out["kinetic_energy"][0])
@@ -168,12 +171,14 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
     """studies.rc_beam.dataset on the two runs: units on every variable, provenance attributes,
     the gates of both runs pass, the crack fractions are fractions."""
     from studies import rc_beam
+    from studies.rc_beam.dataset import dataset
+    from studies.rc_beam.derive import ANGLE_BINS
     from workbench.materials.mortar import H_DAMAGE
     from workbench.results import write
 
     scene = RCBeam(t_end=2.5e-4, n_out=50)
     outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
-    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=False,
+    ds = dataset(scene, outs, ["sph", "csph"], [8], quick=False,
                          kr={8: short_b["sph"]})  # the same run stands in for "with" here
     assert all("units" in ds[v].attrs for v in ds.data_vars)
     for k in ("study", "git_revision", "cpu_count", "param_f_t", "angle_bins"):
@@ -184,7 +189,7 @@ def test_dataset_contract_and_gates(short_b, tmp_path):
     for m in ("sph", "csph"):
         w = float(ds.max_displacement.sel(solver=m, **sel))
         assert 0 < w < 0.01
-        tot = sum(float(ds[f"cracked_{k}"].sel(solver=m, **sel)) for k in rc_beam.ANGLE_BINS)
+        tot = sum(float(ds[f"cracked_{k}"].sel(solver=m, **sel)) for k in ANGLE_BINS)
         assert 0 <= tot <= 1
         # the driver's final history: one row per particle, the mortar's damage in it
         h = short_b[m]["history"]
@@ -206,7 +211,9 @@ def test_largest_value_near_the_end_is_truncated():
     peaking 2.1 ms before it is a maximum (TRUNCATION_MARGIN, 2 ms); the report's text of a
     truncated value is a lower bound; a gate that reads a truncated value fails, not evaluated."""
     from studies.common import Gate
-    from studies.rc_beam import TRUNCATION_MARGIN, history_maximum, show_largest, truncation_gate
+    from studies.rc_beam.derive import TRUNCATION_MARGIN, history_maximum
+    from studies.rc_beam.gates import truncation_gate
+    from studies.rc_beam.report import show_largest
 
     t = np.linspace(0.0, 1e-2, 2001)  # records every 5 µs
     assert TRUNCATION_MARGIN == 2e-3
@@ -230,16 +237,18 @@ def test_short_run_reports_its_largest_values_as_truncated(short_b):
     largest value truncated, the report shows them as lower bounds and does not set them beside
     003's 3 mm as maxima."""
     from studies import rc_beam
+    from studies.rc_beam.dataset import dataset
+    from studies.rc_beam.derive import TRUNCATION_MARGIN
 
     scene = RCBeam(t_end=2.5e-4, n_out=50)
     outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
-    ds = rc_beam.dataset(scene, outs, ["sph", "csph"], [8], quick=True)
+    ds = dataset(scene, outs, ["sph", "csph"], [8], quick=True)
     sel = dict(specimen="B", resolution=8)
     for m in ("sph", "csph"):
         assert float(ds.max_displacement_truncated.sel(solver=m, **sel)) == 1
         assert float(ds.impact_force_window_peak_truncated.sel(solver=m, **sel)) == 1
         t = float(ds.max_displacement_time.sel(solver=m, **sel))
-        assert 2.5e-4 - t < rc_beam.TRUNCATION_MARGIN
+        assert 2.5e-4 - t < TRUNCATION_MARGIN
     notes = rc_beam.report_notes(ds)
     rows = [n for n in notes if n.startswith("B, ") and "H/dx = 8:" in n]
     assert len(rows) == 2
@@ -254,11 +263,11 @@ def test_dataset_attributes_describe_the_runs(short_b):
     """Issue 35: the quick run's dataset recorded specimen A (the scene's default) though only B
     ran. The attributes name the specimens that ran, each with its span and speed, and the run
     length (B, 0.25 ms), not the scene's defaults (A, 10 ms)."""
-    from studies import rc_beam
+    from studies.rc_beam.dataset import dataset
 
     scene = RCBeam(t_end=0.01, n_out=50)  # the default scene, as the study's run gets it
     outs = {(m, "B", 8): short_b[m] for m in ("sph", "csph")}
-    ds = rc_beam.dataset(dataclasses_replace(scene, t_end=2.5e-4), outs, ["sph", "csph"], [8],
+    ds = dataset(dataclasses_replace(scene, t_end=2.5e-4), outs, ["sph", "csph"], [8],
                          quick=True)
     assert ds.attrs["param_specimen"] == "B" and ds.attrs["specimens_run"] == "B"
     assert ds.attrs["param_t_end"] == 2.5e-4
@@ -273,7 +282,7 @@ def test_weight_momentum_is_the_impulse_of_the_impact_force():
     force recorded at every step (velocity Verlet's impulse), to round-off, over the first 40 µs
     of specimen B at 12.5 mm (the contact's first ring, 60 steps)."""
     from sph import driver
-    from studies.rc_beam import OPTIONS
+    from studies.rc_beam.ladders import OPTIONS
 
     for m in ("sph", "csph"):
         out = driver.solve(m, RCBeam(specimen="B", t_end=4e-5, n_out=10 ** 6), 8, **OPTIONS[m])
@@ -289,7 +298,7 @@ def short_b_sparse():
     """short_b's runs recorded every 50 µs (the full run's 200 records over 10 ms) instead of every
     5 µs."""
     from sph import driver
-    from studies.rc_beam import OPTIONS
+    from studies.rc_beam.ladders import OPTIONS
 
     s = RCBeam(specimen="B", t_end=2.5e-4, n_out=5)
     return {m: driver.solve(m, s, 8, **OPTIONS[m]) for m in ("sph", "csph")}
@@ -302,7 +311,7 @@ def test_load_cell_force_does_not_depend_on_the_record_interval(short_b, short_b
     records, only its interpolation between them differs: measured ≤ 0.3 % between records every
     step and every 50 µs), and lies below the penalty's instantaneous peak at the records, which
     rings with a ~20 µs period."""
-    from studies.rc_beam import LOAD_CELL_WINDOW, window_mean_peak
+    from studies.rc_beam.derive import LOAD_CELL_WINDOW, window_mean_peak
 
     assert LOAD_CELL_WINDOW == 1e-4
     (fa, _), (fb, _) = (window_mean_peak(o[method]["time"], o[method]["impact_impulse"])
@@ -326,8 +335,8 @@ def test_first_flexural_frequency_against_the_fem(quick_verify):
 
     import xarray as xr
 
-    from studies.rc_beam import TOL_FREQUENCY
-    from workbench.scenes.rc_beam import D10_AREA
+    from studies.rc_beam.gates import TOL_FREQUENCY
+    from studies.rc_beam.scene import D10_AREA
 
     out, _ = quick_verify
     with xr.open_dataset(out / "rc_beam.nc") as ds:
@@ -357,7 +366,7 @@ def test_crack_orientation_of_a_uniform_stretch(direction, expected):
     release strain, x = X + 2 ε_0 (n·X) n: the corrected gradients are exact for a linear field, so
     every mortar particle has the principal strain 2ε_0 + 2ε_0² (> ε_0: an open crack) along n, and
     falls in n's class (0°, 45°, 90° from the span); at half the release strain none is open."""
-    from studies.rc_beam import crack_orientation
+    from studies.rc_beam.derive import crack_orientation
     from sph.driver import model_at
     from sph.particles import discretise
 
@@ -383,7 +392,7 @@ def test_crack_classes_from_the_damage_tensor():
     are the constructed counts over all mortar particles; the directions the constructed n."""
     from sph.driver import model_at
     from sph.particles import discretise
-    from studies.rc_beam import CRACK_DAMAGE, crack_orientation
+    from studies.rc_beam.derive import CRACK_DAMAGE, crack_orientation
     from workbench.materials.mortar import H_OMEGA, N_HISTORY
 
     s = RCBeam(specimen="B")

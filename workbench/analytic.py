@@ -185,7 +185,7 @@ def failure_energy_density(material, eps_L: float) -> float:
     ∫₀^{ε_L} σ_y(e) de, integrated from the law's hardening curve (``material.yield_stress``) by
     adaptive quadrature, plus the elastic energy the drop releases, σ_y(ε_L)²/(2E). Written apart
     from the material code (its closed form :func:`workbench.materials.j2.plastic_work` and
-    :func:`workbench.scenes.fracture.band_energy_density`), which it checks."""
+    :func:`studies.microcantilever.scene.band_energy_density`), which it checks."""
     from scipy.integrate import quad
 
     sy = lambda e: float(material.yield_stress(e))  # noqa: E731
@@ -198,6 +198,6 @@ def crack_band_energy(material, eps_L: float, band: float, area: float) -> float
     section it crosses) takes in the crack-band model: a band ``band`` (m) wide of material failing
     at ε_p = ε_L, each unit volume spending g(ε_L) (:func:`failure_energy_density`):
     G = b · g(ε_L) · A. Under the regularised rule the particles' ε_L,eff keeps Δx·g(ε_L,eff) =
-    b·g(ε_L) (:func:`workbench.scenes.fracture.crack_band_limit`), so a straight column of failed
+    b·g(ε_L) (:func:`studies.microcantilever.scene.crack_band_limit`), so a straight column of failed
     particles across the section takes this at every spacing."""
     return float(band) * failure_energy_density(material, eps_L) * float(area)

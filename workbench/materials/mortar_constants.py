@@ -8,6 +8,10 @@ import math
 
 import numpy as np
 
+PAPER_SPACING = 0.005
+"""003 §4.1: the particle size at which the release strain is 17 000 µ, m (the RC beam's
+mortar and the crack-band bar scale their release strain from it)."""
+
 
 def release_strain(E: float, f_t: float, G_f: float, particle_size: float) -> float:
     """003 eq. 5 with the linear release of Fig. 8: g_F = G_F/h is the area ½ f_t ε_0 under the

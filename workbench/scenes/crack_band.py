@@ -71,8 +71,8 @@ import workbench.scenes.model as m
 
 from ..materials import Material
 from ..materials.mortar import fracture_energy
+from ..materials.mortar_constants import PAPER_SPACING
 from .params import ParameterError, Scene, param
-from .rc_beam import PAPER_SPACING
 from .shapes import Box, Plane
 
 

@@ -1,12 +1,12 @@
 """The micro-cantilever's load at the first failure in the root region, on a ladder of its own
 (``workbench run microcantilever_root``): gate 1's second half and gate 5's observed order of the
 issue for the 3-D scene, which the default ``microcantilever`` run leaves out because it takes
-hours on 2 cores (:func:`studies.microcantilever.root_ladder`).
+hours on 2 cores (:func:`studies.microcantilever.study.root_ladder`).
 
 At each resolution the FEM (27-node hexahedra in 3-D, 9-node quadrilaterals in 2-D; J2 with Swift
 per grain and boundary) and static csph (the study's options, Newton) push the loading patch down
-along :func:`studies.microcantilever.root_ladder_path` without damage, and each stops once both
-cases have failed in :func:`studies.microcantilever.root_region` (ε_p ≥ ε_L: the grain boundaries'
+along :func:`studies.microcantilever.static.root_ladder_path` without damage, and each stops once both
+cases have failed in :func:`studies.microcantilever.static.root_region` (ε_p ≥ ε_L: the grain boundaries'
 0.002 for ``inter``, the grains' for ``intra``). The FEM's loads at that first failure give a
 Richardson limit at the singular order; csph's are gated against it at each resolution (within the
 FEM's own error at the same nodal spacing, at least 3 %) and at the finest (3 %, the issue's
@@ -22,15 +22,18 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.scenes.fracture import MicroCantilever
-
-from . import microcantilever as mc
-from .common import check_resolutions
+from ..common import check_resolutions
+# gates, report_notes and quick_scene are the micro-cantilever study's: this study's protocol too
+from .gates import TOL_FIRST_FAILURE, gates  # noqa: F401
+from .ladders import FEM_RESOLUTIONS, FEM_RESOLUTIONS_3D, quick_scene  # noqa: F401
+from .report import report_notes  # noqa: F401
+from .scene import MicroCantilever
+from .study import root_ladder
 
 NAME = "microcantilever_root"
 SCENE = MicroCantilever
 SOLVERS = ("csph",)
-RESOLUTIONS = {"csph": list(mc.FEM_RESOLUTIONS_3D)}
+RESOLUTIONS = {"csph": list(FEM_RESOLUTIONS_3D)}
 """3-D: H/Δx = H/h = 5, 10, 15 (1776 to 38 176 particles, 1250 to 33 750 hexahedra); measured on 2
 cores, the FEM at 10 takes 20 minutes and at 15 53 minutes and 11 GB, csph at 10 7 minutes and at
 15 44 minutes and 3.7 GB (its AMG-CG solves run on one core). csph's load is then 16.8, 8.8 and
@@ -41,19 +44,15 @@ QUICK_RESOLUTIONS = {"csph": [5, 10, 20, 40]}
 bounds at the finest hold in 2-D (5 min 51 s on one core beside another job, csph at 40 42 s and
 the FEM at 80 3.9 minutes of it; every gate passes). Below 40 csph's 2-D loads are not within 3 %
 of the FEM's limit: 5.9 % (inter) and 4.6 % (intra) at 20."""
-QUICK_FEM_RESOLUTIONS = mc.FEM_RESOLUTIONS
+QUICK_FEM_RESOLUTIONS = FEM_RESOLUTIONS
 """``--quick``: the FEM's 2-D ladder, H/h = 5 to 80, a mesh beyond csph's
-(:data:`studies.microcantilever.FEM_RESOLUTIONS` says why)."""
-
-gates = mc.gates
-report_notes = mc.report_notes
-quick_scene = mc.quick_scene
+(:data:`studies.microcantilever.ladders.FEM_RESOLUTIONS` says why)."""
 ERROR_LABEL = "|load at the first failure in the root region / FEM limit - 1| [-]"
 
 
 def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, quick: bool = False,
         scheduler: str | None = None) -> xr.Dataset:
-    """:func:`studies.microcantilever.root_ladder` at ``resolutions`` (a list, or a dict with
+    """:func:`studies.microcantilever.study.root_ladder` at ``resolutions`` (a list, or a dict with
     'csph'; the FEM runs at the same ones); ``quick``: the 2-D scene at QUICK_RESOLUTIONS. The runs
     are in this process, one after the other (``scheduler`` is accepted and unused: the largest
     of them needs most of this machine's memory)."""
@@ -69,7 +68,7 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     res = check_resolutions(resolutions or table["csph"])
     for r in res:  # a grain boundary thinner than the spacing is bad input, not a failed run
         scene.model(scene.H / r)
-    return mc.root_ladder(scene, res, QUICK_FEM_RESOLUTIONS if quick and not resolutions else None)
+    return root_ladder(scene, res, QUICK_FEM_RESOLUTIONS if quick and not resolutions else None)
 
 
 def errors(ds: xr.Dataset) -> list[dict]:
@@ -100,7 +99,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     import matplotlib.pyplot as plt
     from pathlib import Path
 
-    from .figures import STYLE, save
+    from ..figures import STYLE, save
 
     unit = ds.fem_root_limit.attrs.get("units", "N")
     scale, shown = (1e3, "mN") if unit == "N" else (1e-3, "kN/m")
@@ -109,7 +108,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
         lim = float(ds.fem_root_limit.sel(case=case)) * scale
         if np.isfinite(lim):
             ax.axhline(lim, color="k", lw=1, label="FEM limit (singular order)")
-            ax.axhspan(lim * (1 - mc.TOL_FIRST_FAILURE), lim * (1 + mc.TOL_FIRST_FAILURE),
+            ax.axhspan(lim * (1 - TOL_FIRST_FAILURE), lim * (1 + TOL_FIRST_FAILURE),
                        color="0.85", label="limit ± 3 % (issue, finest)")
         ax.plot(ds.fem_resolution.values, ds.fem_first_failure_root_load.sel(case=case) * scale,
                 label="FEM, elements across H", **{**STYLE["fem"], "ls": "-"})

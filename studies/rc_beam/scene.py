@@ -88,9 +88,10 @@ from dataclasses import dataclass, field
 
 import workbench.scenes.model as m
 
-from ..materials import Material, linear_hardening_modulus
-from .params import ParameterError, Scene, SceneError, param
-from .shapes import Box, Difference, Plane, Point, Union
+from workbench.materials import Material, linear_hardening_modulus
+from workbench.materials.mortar_constants import PAPER_SPACING
+from workbench.scenes.params import ParameterError, Scene, SceneError, param
+from workbench.scenes.shapes import Box, Difference, Plane, Point, Union
 
 D10_AREA = 71.33e-6
 """JIS G 3112 nominal section of a D10 deformed bar, m²."""
@@ -101,8 +102,6 @@ SPECIMENS = {
     "B": dict(span=0.4, velocity=1.4, stirrups=()),
 }
 """003 §2, Fig. 1–2: span (m), impact velocity (m/s), stirrup positions from mid-span (m)."""
-PAPER_SPACING = 0.005
-"""003 §4.1: the particle size at which the release strain is 17 000 µ, m."""
 TOL = 1e-9
 
 

@@ -54,9 +54,9 @@ import numpy as np
 
 import workbench.scenes.model as m
 
-from ..materials import Material
-from .params import ParameterError, SceneError, Scene, param
-from .shapes import Box, Plane, Shape, Union, VoronoiCell, _points
+from workbench.materials import Material
+from workbench.scenes.params import ParameterError, SceneError, Scene, param
+from workbench.scenes.shapes import Box, Plane, Shape, Union, VoronoiCell, _points
 
 TABLE2_E = (222e9, 212e9, 202e9, 192e9, 182e9)
 """000 Table 2: Young's moduli of the five grains, Pa (the grain at the support first)."""
@@ -70,7 +70,7 @@ def band_energy_density(material: Material, eps_L: float) -> float:
     drop there (Bažant & Oh 1983, the crack band's G_f/w_c): the plastic work
     W_p(ε_L) = ∫₀^{ε_L} σ_y dε_p (:func:`workbench.materials.j2.plastic_work`, closed form) plus
     the elastic energy released by the drop, σ_y(ε_L)²/(2E)."""
-    from ..materials.j2 import plastic_work
+    from workbench.materials.j2 import plastic_work
 
     sy = float(material.yield_stress(eps_L))
     return float(plastic_work(material.params(), float(eps_L), sy)) + sy * sy / (2.0 * material.E)
