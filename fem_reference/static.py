@@ -196,19 +196,21 @@ class Problem:
         if all_live:
             out = update(self.table, Hm, state.history, self.plane, tangent=tangent,
                          F33=state.F33, mat_id=self.point_mat)
-        else:
-            sub = update(self.table, Hm[live], state.history[live], self.plane, tangent=tangent,
-                         F33=state.F33[live], mat_id=self.point_mat[live])
+        else:  # failed points carry no stress; every point failed: the body carries nothing
             n = len(H)
             out = dict(P=np.zeros((n, d, d)), A=None, history=state.history.copy(),
                        status=np.zeros(n, dtype=np.int64), F33=state.F33.copy())
-            out["P"][live] = sub["P"]
-            out["history"][live] = sub["history"]
-            out["status"][live] = sub["status"]
-            out["F33"][live] = sub["F33"]
             if tangent:
                 out["A"] = np.zeros((n, d, d, d, d))
-                out["A"][live] = sub["A"]
+            if live.any():
+                sub = update(self.table, Hm[live], state.history[live], self.plane,
+                             tangent=tangent, F33=state.F33[live], mat_id=self.point_mat[live])
+                out["P"][live] = sub["P"]
+                out["history"][live] = sub["history"]
+                out["status"][live] = sub["status"]
+                out["F33"][live] = sub["F33"]
+                if tangent:
+                    out["A"][live] = sub["A"]
         if kin is not None:
             if not all_live:  # dead points: keep the kinematics finite for the tangent
                 dead = ~live & ~((kin["J"] > 0) & (kin["Jbar"] > 0))

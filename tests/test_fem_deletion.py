@@ -114,3 +114,20 @@ def test_damage_is_read_at_j2_points_only():
     with pytest.raises(ValueError, match="deletion"):
         Problem(disc, MaterialTable((MORTAR_003,)), None, np.zeros(0),
                 lambda lam: np.zeros(disc.N), deletion="any")
+
+
+def test_a_body_that_fails_everywhere_carries_nothing_and_does_not_crash():
+    """The SS curve's block with damage (ε_L = 0.05) fails at every point at once under its
+    homogeneous stretch: the FEM's path goes on (status ok, not 'error: cannot reshape …'), the
+    force is zero from the first load value past failure, and until then it is the damage-free
+    block's — failure where the damage-free block's plastic strain passes ε_L."""
+    from fem_reference import solve_model
+    from workbench.scenes import SSCurve
+
+    free = solve_model(SSCurve(), 2)
+    out = solve_model(SSCurve(eps_L=0.05), 2)
+    assert all(str(s).startswith("ok") for s in np.atleast_1d(out["status"])), out["status"]
+    k = int(np.argmax(np.asarray(free["eps_p"]) >= 0.05))  # the first value past ε_L
+    assert 0 < k < len(free["eps_p"]) - 1
+    np.testing.assert_allclose(out["reaction"][:k], free["reaction"][:k], rtol=1e-9)
+    np.testing.assert_array_equal(out["reaction"][k:], 0.0)
