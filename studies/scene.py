@@ -45,10 +45,14 @@ def solvers_for(model: M.Model) -> tuple:
     """The methods that can run ``model``: the gradient-form particle methods (static, modal and
     explicit drives), classic SPH for explicit and static drives (a static one by dynamic
     relaxation through its own explicit step, as ``sph.driver.solve`` runs it; it has no
-    tangent for a modal one), the FEM where it reads scene models."""
+    tangent for a modal one), the FEM where it reads scene models (not a model with a
+    :class:`~workbench.scenes.model.PreCrack` or a :class:`~workbench.scenes.model.CrackTip`: it
+    cuts no elements)."""
     from sph import METHODS
 
     out = [m for m in METHODS if m != "sph" or not isinstance(model.drive, M.Modal)]
+    if model.cracks or any(isinstance(o, M.CrackTip) for o in model.observables):
+        return tuple(out)
     try:
         import fem_reference
 
@@ -96,7 +100,7 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     else:
         axis = ("mode", np.arange(1, drive.n_modes + 1), {"units": "-"})
     n_ax = len(axis[1])
-    series = {o.name: np.full(shp + (n_ax,), np.nan) for o in obs}
+    series = {n: np.full(shp + (n_ax,), np.nan) for o in obs for n in M.record_names(o, model.dim)}
     if isinstance(drive, M.Explicit):
         series.update({k: np.full(shp + (n_ax,), np.nan) for k in ENERGIES})
     if isinstance(drive, M.Modal):
@@ -136,6 +140,10 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     units = {M.Displacement: "m", M.Position: "m", M.Reaction: "N", M.MeanStress: "Pa",
              M.FailedFraction: "-"}
     for o in obs:
+        if isinstance(o, M.CrackTip):
+            for n, u in o.outputs(model.dim):
+                data[n] = (dims + (axis[0],), series[n], {"units": u, "long_name": f"{n} of {o!r}"})
+            continue
         data[o.name] = (dims + (axis[0],), series[o.name],
                         {"units": units.get(type(o), "-"), "long_name": repr(o)})
     for name in (*ENERGIES, "period"):
