@@ -130,3 +130,83 @@ def test_nothing_failed():
     for pts in (np.zeros((0, 2)), np.array([[0.9, 0.9]])):
         p = crack_path(pts, o, 2 * DX, reference=(1.0, 0.0))
         assert np.array_equal(p.tip, o) and p.length == 0.0 and math.isnan(p.angle)
+
+
+# ------------------------------------------------------------------------------------------------
+# The CrackTip observable end to end
+# ------------------------------------------------------------------------------------------------
+
+def _notched_scene():
+    from dataclasses import dataclass, field
+
+    from workbench.materials import Material
+    from workbench.scenes import model as M
+    from workbench.scenes import shapes as S
+    from workbench.scenes.params import Scene
+
+    @dataclass(frozen=True)
+    class Notched(Scene):
+        """A 1 cm J2-damage plate with an edge pre-crack to 3 mm, pulled apart at 10 m/s."""
+
+        name: str = field(default="notched", metadata=dict(hidden=True))
+
+        def model(self, spacing=None):
+            L = 0.01
+            dx = L / 20 if spacing is None else spacing
+            mat = Material.j2_linear(200e9, 0.3, 400e6, 1e9, 7850.0, eps_L=0.05)
+            y = 0.5 * L + 0.25 * dx  # between two lattice rows
+            return M.Model(
+                dim=2, length=L, regions=(M.Region("plate", S.Box((0, 0), (L, L)), mat),),
+                cracks=(M.PreCrack("notch", ((-0.001, y), (0.3 * L, y))),),
+                sets=(M.Set("top", S.Plane(1, L)), M.Set("bottom", S.Plane(1, 0.0))),
+                constraints=(M.Prescribed("top", 1, velocity=10.0),
+                             M.Prescribed("bottom", 1, velocity=-10.0)),
+                drive=M.Explicit(t_end=1.6e-5, n_out=16),
+                observables=(M.CrackTip("tip", "notch"),))
+
+    return Notched()
+
+
+def test_crack_tip_observable_end_to_end():
+    """A short csph run of a notched J2-damage plate pulled apart: the CrackTip records start at
+    the pre-crack's tip (nothing failed), the crack grows from it, the last record is the path of
+    the run's final failed particles (the returned state, measured again here), and the speed is
+    the length's difference quotient."""
+    from sph.driver import solve
+
+    sc = _notched_scene()
+    out = solve("csph", sc, 20)
+    assert out["status"] == "ok"
+    dx = 0.01 / 20
+    y = 0.005 + 0.25 * dx
+    assert out["tip_x"][0] == pytest.approx(0.003) and out["tip_y"][0] == pytest.approx(y)
+    assert out["tip_length"][0] == 0.0 and math.isnan(out["tip_angle"][0])
+    failed = out["failed_particles"]
+    assert failed.any()
+    p = crack_path(out["X"][failed], (0.003, y), 2 * dx, reference=(1.0, 0.0))
+    assert p.length >= 2 * dx and p.tip[0] > 0.003 + dx  # grown ahead of the pre-crack
+    last = [out[f"tip_{k}"][-1] for k in ("x", "y", "length", "angle")]
+    assert last == pytest.approx([*p.tip, p.length, p.angle], rel=1e-12)
+    v = np.diff(out["tip_length"]) / np.diff(out["time"])
+    assert np.allclose(out["tip_speed"][1:], v) and out["tip_speed"][0] == 0.0
+
+
+def test_crack_tip_checks():
+    from workbench.materials import Material
+    from workbench.scenes import model as M
+    from workbench.scenes import shapes as S
+    from workbench.scenes.params import SceneError
+
+    def mk(o):
+        return M.Model(dim=2, length=1.0,
+                       regions=(M.Region("p", S.Box((0, 0), (1, 1)), Material.svk(1e9, 0.3)),),
+                       drive=M.Explicit(1e-3), observables=(o,))
+
+    with pytest.raises(SceneError, match="origin 'nope' is not a PreCrack"):
+        mk(M.CrackTip("tip", "nope"))
+    with pytest.raises(SceneError, match="origin .* is not allowed"):
+        mk(M.CrackTip("tip", (0.1, 0.2, 0.3)))
+    with pytest.raises(SceneError, match="spacing"):
+        mk(M.CrackTip("tip", (0.1, 0.2), spacing=0.0))
+    assert [n for n, _ in M.CrackTip("t", (0, 0)).outputs(2)] == [
+        "t_x", "t_y", "t_length", "t_angle", "t_speed"]
