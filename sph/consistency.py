@@ -241,18 +241,22 @@ def _exposed_faces(X, I, o, dx: float, inside, cracks=None):
     return signs, ins, faces
 
 
-def off_lattice_faces(nodes, dx: float, inside, origin=None) -> float:
+def off_lattice_faces(nodes, dx: float, inside, origin=None, cracks=None) -> float:
     """The share of the boundary of the body ``inside`` (as :func:`boundary_normals` sees it) that
     lies half a spacing from the lattice nodes instead of through them: 0 for a union of boxes
     whose faces lie on lattice planes (node lattice), 1 for a cell lattice. Where it is not 0 the
     integration-consistent correction extrapolates the gradients of the outermost nodes to a face
     beyond them; on a node lattice with some faces off (a 3-D beam of odd H/Δx on a block whose
     faces are on the lattice) it is ill-posed — the corrections grow to ten times the gradients
-    and the highest frequency forty-fold."""
+    and the highest frequency forty-fold. ``cracks``: pre-crack facets, whose faces
+    (:func:`boundary_normals`) lie on the dual cells' boundary, half a spacing from their nodes —
+    off the lattice: with a pre-crack the highest frequency of the consistent correction grows
+    with the resolution (ω_max Δx/c = 3.3, 7.5, 19 at 10, 18, 34 spacings across a centre-cracked
+    plate, against 2.2 uncracked)."""
     X = np.asarray(nodes, dtype=np.float64)
     o = X[0] if origin is None else np.asarray(origin, dtype=np.float64)
     I = np.rint((X - o) / dx).astype(np.int64)
-    _, _, faces = _exposed_faces(X, I, o, dx, inside)
+    _, _, faces = _exposed_faces(X, I, o, dx, inside, cracks)
     total = sum(f[2].size for f in faces)
     return float(sum(np.count_nonzero(f[3]) for f in faces) / total) if total else 0.0
 

@@ -22,7 +22,8 @@ extrapolates and raises the highest frequency 2.4-fold (ω_max Δx/c = 6.9 again
 slab; 2.3 against 2.9 on a node lattice), which the explicit step of the CFL estimate does not
 survive; and a node lattice with some faces half a spacing between its planes, where the
 correction is ill-posed: :func:`off_lattice_share`, kept in ``consistency`` when asked for
-explicitly) replaces G by the smallest change
+explicitly; a body with a pre-crack, whose crack faces lie half a spacing from the nodes on either
+side, is such a body: it gets ``"nodal"``) replaces G by the smallest change
 that makes the force patch test exact (:mod:`sph.consistency`: uniform stretch and shear are
 discrete equilibria with free faces, symmetry planes, loaded faces and clamps, at any resolution,
 while F stays exact for affine — and with the quadratic correction quadratic — motions and the
@@ -144,7 +145,8 @@ def off_lattice_share(ps) -> float:
     if ps.origin is None or ps.domain_shape is None:
         return math.nan
     shape = ps.domain_shape
-    return off_lattice_faces(ps.X, ps.dx, lambda q: shape.contains(q, 0.0), origin=ps.origin)
+    return off_lattice_faces(ps.X, ps.dx, lambda q: shape.contains(q, 0.0), origin=ps.origin,
+                             cracks=ps.cracks)
 
 
 def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",

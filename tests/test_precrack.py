@@ -150,7 +150,8 @@ def test_centre_crack_opens_and_matches_tada(method):
     The expected error: a lattice resolves a crack tip to about one spacing, and the corrected
     kernel smooths the r^(1/2) field over its support, an O(Δx) error in the compliance (observed
     order ~1). The tolerance is the closed form's own change when each tip moves by one spacing,
-    |Δδ(a + Δx) − Δδ(a)| / Δδ(a) (27 % at Δx = a/8.5, the finest); the order must be at least 0.7
+    |Δδ(a + Δx) − Δδ(a)| / Δδ(a) (143, 65, 31 %; measured 58, 32, 17 % for csph, 57, 31, 16 %
+    for csph_bl, order 1.0); the order must be at least 0.7
     (1 expected). Tada's F(a/W) is good to 0.1 % and H = 2W to well under 1 % of Δδ."""
     sc = CentreCrackPlate()
     ref = sc.reference()["crack_stretch"]
@@ -201,3 +202,22 @@ def test_bad_precrack_3d():
         _plate((M.PreCrack("c", ((0, 0, 0.5), (1, 0, 0.5), (1, 1, 0.6), (0, 1, 0.5))),), dim=3)
     with pytest.raises(SceneError, match="2-D points in a 3-D model"):
         _plate((M.PreCrack("c", ((0, 0), (1, 0))),), dim=3)
+
+
+def test_csph_on_a_cracked_body_keeps_its_time_step():
+    """The crack faces lie half a spacing from the nodes on either side (off the lattice): there
+    the integration-consistent correction is ill-posed (its highest frequency grows with the
+    resolution, ω_max Δx/c = 7.5 at 18 spacings against 2.2 uncracked), so csph's 'auto' takes
+    nodal integration on a cracked body, and its critical step is the uncracked nodal body's (the
+    crack only removes pairs; 5 % allowed for the changed spectrum)."""
+    import dataclasses
+
+    from sph.driver import scene_time_steps
+
+    class Uncracked(CentreCrackPlate):
+        def model(self, spacing=None):
+            return dataclasses.replace(super().model(spacing), cracks=())
+
+    cracked = scene_time_steps("csph", CentreCrackPlate(), 18)
+    plain = scene_time_steps("csph", Uncracked(), 18, integration="nodal")
+    assert cracked["dt_crit"] >= 0.95 * plain["dt_crit"]
