@@ -9,9 +9,13 @@ compliance,
 
 from the energy release rate G = K²/E' of each tip, K = σ √(π a) F(a/W), by Castigliano
 (Tada, Paris & Irwin, *The Stress Analysis of Cracks Handbook*, 3rd ed. 2000, p. 5.1 and 5.3):
-F(α) = (1 − 0.025 α² + 0.06 α⁴) √sec(πα/2) (Feddersen–Tada, 0.1 % for any α, a plate of
-height H ≥ 1.5 W), E' = E/(1 − ν²). For a small crack it is π σ a² / (E' W), the load-point
-image of the crack-opening displacement 4σ/E' √(a² − x²).
+F(α) = (1 − 0.025 α² + 0.06 α⁴) √sec(πα/2) (Feddersen–Tada, 0.1 % for any α, an infinitely
+long strip), E' = E/(1 − ν²). For a small crack it is π σ a² / (E' W), the load-point image of
+the crack-opening displacement 4σ/E' √(a² − x²). The finite height checked with the FEM on a
+quarter of the plate (symmetry planes, the crack face free, the ligament on a roller; Q9 at 16,
+32, 64 elements across W, a = W/2): Δδ/Δδ_Tada − 1 = −2.2, −1.1, −0.5 % at H = 2W (first order,
+to ≈ 0 %), +0.6, +1.2 % at 32, 64 at H = 1.5W (to ≈ +2 %): H ≥ 2W keeps the strip's closed
+form within a few tenths of a per cent.
 """
 from __future__ import annotations
 
@@ -51,7 +55,7 @@ class CentreCrackPlate(Scene):
 
     name: str = field(default="centre_crack", metadata=dict(hidden=True))
     W: float = param(1.0, "m", "half-width", lo=0, lo_open=True)
-    H: float = param(2.0, "m", "half-height (>= 1.5 W: the strip of the closed form)", lo=0, lo_open=True)
+    H: float = param(2.0, "m", "half-height (>= 2 W: the strip of the closed form)", lo=0, lo_open=True)
     a: float = param(0.5, "m", "crack half-length", lo=0, lo_open=True)
     E: float = param(1.0e9, "Pa", "Young's modulus", lo=0, lo_open=True)
     nu: float = param(0.3, "-", "Poisson's ratio", lo=-1, hi=0.5, lo_open=True, hi_open=True)
@@ -60,8 +64,8 @@ class CentreCrackPlate(Scene):
     def check(self):
         if not self.a < 0.8 * self.W:
             raise ParameterError(f"a: {self.a:g} m is out of range; allowed: (0, 0.8 W = {0.8 * self.W:g}) m")
-        if not self.H >= 1.5 * self.W:
-            raise ParameterError(f"H: {self.H:g} m is out of range; allowed: [1.5 W = {1.5 * self.W:g}, inf) m")
+        if not self.H >= 2 * self.W:
+            raise ParameterError(f"H: {self.H:g} m is out of range; allowed: [2 W = {2 * self.W:g}, inf) m")
 
     @property
     def E_prime(self) -> float:
