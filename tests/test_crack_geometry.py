@@ -210,3 +210,20 @@ def test_crack_tip_checks():
         mk(M.CrackTip("tip", (0.1, 0.2), spacing=0.0))
     assert [n for n, _ in M.CrackTip("t", (0, 0)).outputs(2)] == [
         "t_x", "t_y", "t_length", "t_angle", "t_speed"]
+
+
+def test_crack_tip_in_the_scene_dataset():
+    """The generic scene study stores a CrackTip's histories as variables of the run's dataset,
+    each with its units, on the drive's common time grid (the driver's records: n_out = 16 over
+    t_end, so the grid is the records' times)."""
+    from sph.driver import solve
+    from studies import scene as study
+
+    sc = _notched_scene()
+    ds = study.run(sc, solvers=["csph"], resolutions=[20])
+    units = {"tip_x": "m", "tip_y": "m", "tip_length": "m", "tip_angle": "deg", "tip_speed": "m/s"}
+    for n, u in units.items():
+        assert ds[n].attrs["units"] == u
+    out = solve("csph", sc, 20)
+    got = ds["tip_length"].sel(solver="csph", resolution=20).values
+    assert np.allclose(got, np.interp(ds["time"].values, out["time"], out["tip_length"]))
