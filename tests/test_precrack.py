@@ -222,3 +222,18 @@ def test_csph_on_a_cracked_body_keeps_its_time_step():
     cracked = scene_time_steps("csph", CentreCrackPlate(), 18)
     plain = scene_time_steps("csph", Uncracked(), 18, integration="nodal")
     assert cracked["dt_crit"] >= 0.95 * plain["dt_crit"]
+
+
+def test_centre_crack_study_gates():
+    """`workbench run centre_crack --quick` for one method: its gates pass, name an independent
+    reference, and each fails a three-fold regression of its error (an order gate: the order a
+    three-fold error at the finest rung would show, Gate.regressed)."""
+    from studies import centre_crack as study
+
+    ds = study.run(solvers=["csph_bl"], quick=True)
+    gates = study.gates(ds)
+    assert len(gates) == len(study.QUICK_RESOLUTIONS["csph_bl"]) + 1
+    for g in gates:
+        assert g.passed and g.reference, g.line()
+        assert not g.regressed(3.0).passed, g.line()
+    assert ds["error"].attrs["units"] == "-" and ds["crack_stretch"].attrs["units"] == "m"
