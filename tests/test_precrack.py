@@ -237,3 +237,25 @@ def test_centre_crack_study_gates():
         assert g.passed and g.reference, g.line()
         assert not g.regressed(3.0).passed, g.line()
     assert ds["error"].attrs["units"] == "-" and ds["crack_stretch"].attrs["units"] == "m"
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_boundary_normals_see_the_crack_faces(order):
+    """`boundary_normals(..., cracks=)` (the consistent integration asked for explicitly): a crack
+    through a unit plate between the rows y = 0.5 and 0.6 makes each side a closed body — the
+    boundary vectors of each side sum to zero, the rows beside the crack carry its faces (+Δx e_y
+    below, −Δx e_y above, Δx/2 at the plate's corners), and each side's volumes (order 2: the
+    quadratic rule, its stencils kept on their side) add up to its area, 0.55 and 0.45."""
+    from sph.consistency import boundary_normals
+
+    ps = discretise(_plate((M.PreCrack("c", ((-0.1, 0.55), (1.1, 0.55))),)), 10)
+    V, n = boundary_normals(ps.X, ps.dx, lambda q: ps.domain_shape.contains(q, 0.0),
+                            origin=ps.origin, order=order, cracks=ps.cracks)
+    top = ps.X[:, 1] > 0.55
+    for side, area in ((top, 0.45), (~top, 0.55)):
+        assert np.abs(n[side].sum(axis=0)).max() < 1e-14
+        assert V[side].sum() == pytest.approx(area, rel=1e-13)
+    below = np.isclose(ps.X[:, 1], 0.5)
+    above = np.isclose(ps.X[:, 1], 0.6)
+    inner = (ps.X[:, 0] > 0.05) & (ps.X[:, 0] < 0.95)
+    assert np.allclose(n[below & inner], [0.0, 0.1]) and np.allclose(n[above & inner], [0.0, -0.1])
