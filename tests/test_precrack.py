@@ -259,3 +259,31 @@ def test_boundary_normals_see_the_crack_faces(order):
     above = np.isclose(ps.X[:, 1], 0.6)
     inner = (ps.X[:, 0] > 0.05) & (ps.X[:, 0] < 0.95)
     assert np.allclose(n[below & inner], [0.0, 0.1]) and np.allclose(n[above & inner], [0.0, -0.1])
+
+
+@pytest.mark.parametrize("method", ["csph", "csph_bl"])
+def test_precrack_across_a_symmetry_plane(method):
+    """Half the centre-cracked plate, X ≥ 0, with the centre line a symmetry plane (the methods
+    compute its mirror image, sph.mirror): the crack's mirror image is cut too
+    (workbench.crack_geometry.facets with the planes), and the half plate stretches as the whole
+    one to round-off."""
+    import dataclasses
+
+    from workbench.scenes.shapes import Box
+
+    class Half(CentreCrackPlate):
+        def model(self, spacing=None):
+            full = super().model(spacing)
+            return dataclasses.replace(
+                full, regions=(dataclasses.replace(full.regions[0],
+                                                   shape=Box((0.0, -self.H), (self.W, self.H))),),
+                sets=tuple(s for s in full.sets if s.name in ("top", "bottom", "centre_line")),
+                cracks=(M.PreCrack("crack", ((-0.1, 0.0), (self.a, 0.0))),),
+                observables=(M.Displacement("stretch", "top", 1),))
+
+        def summarise(self, out):
+            return {}
+
+    whole = solve(method, CentreCrackPlate(), 18)["stretch"][-1]
+    half = solve(method, Half(), 18)["stretch"][-1]
+    assert half == pytest.approx(whole, rel=1e-10)
