@@ -177,6 +177,7 @@ class Run:
         self.ps = ps
         self.body = body
         self.prescribed = [c for c in model.constraints if isinstance(c, M.Prescribed)]
+        self.crack_paths = {}  # CrackTip name -> its path (K, d) at the latest record
         self.fixed = ps.fixed
         self.varying = bool(self.prescribed) or any(
             not isinstance(getattr(ld, "scale", 1.0), (int, float)) and
@@ -286,6 +287,7 @@ class Run:
         origin, ref = self.model.tip_origin(o)
         failed = self._failed_mask(state) & ps.in_regions(o.regions)
         p = crack_path(ps.X[failed], origin, o.spacing * ps.dx, ref)
+        self.crack_paths[o.name] = p.path
         names = [n for n, _ in o.outputs(ps.dim)]
         vals = [*p.tip, p.length, p.angle, math.nan]
         return dict(zip(names, (float(v) for v in vals)))
@@ -293,10 +295,12 @@ class Run:
     def tip_speeds(self, out: dict, t) -> None:
         """``<name>_speed`` of each :class:`~workbench.scenes.model.CrackTip` in ``out``: the
         difference quotient of its length over the records' times (or load values) ``t``, 0 at
-        the first (m/s, or m per unit load parameter)."""
+        the first (m/s, or m per unit load parameter); and ``<name>_path`` (K, d), m, the path
+        (origin, centroids, tip) at the last record."""
         for o in self.model.observables:
             if not isinstance(o, M.CrackTip):
                 continue
+            out[f"{o.name}_path"] = self.crack_paths.get(o.name)
             L = np.asarray(out[f"{o.name}_length"], float)
             tt = np.asarray(t, float)[:len(L)]
             v = np.zeros(len(L))

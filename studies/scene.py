@@ -155,12 +155,30 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
         data[name] = (dims, arr, {"units": "m" if name.endswith("amplitude") else "s"})
     for name, arr in notes.items():
         data[name] = (dims, arr.astype(str), {"units": "-", "long_name": "'ok', or why there is no period"})
+    for o in (o for o in obs if isinstance(o, M.CrackTip)):
+        data[f"{o.name}_path"] = _paths(o, model.dim, solvers, all_res, outs)
     ds = xr.Dataset(data, coords={"solver": solvers, "resolution": all_res,
                                   axis[0]: (axis[0], axis[1], axis[2])})
     ds.attrs.update(results.provenance(scene.name, scene))
     ds.attrs.update(model.describe())
     ds.attrs["plane"] = str(model.plane)
     return ds
+
+
+def _paths(o, dim: int, solvers, resolutions, outs) -> tuple:
+    """The dataset variable ``<name>_path`` of the :class:`~workbench.scenes.model.CrackTip`
+    ``o``: each run's crack path at its last record (origin, centroids, tip), m, padded with NaN
+    to the longest, dims (solver, resolution, ``<name>_point``, ``<name>_coordinate``)."""
+    paths = {k: np.asarray(v.get(f"{o.name}_path"), float).reshape(-1, dim)
+             for k, v in outs.items() if v.get(f"{o.name}_path") is not None}
+    n = max([len(p) for p in paths.values()] + [1])
+    arr = np.full((len(solvers), len(resolutions), n, dim), np.nan)
+    for (s, r), p in paths.items():
+        if s in solvers and r in resolutions:
+            arr[list(solvers).index(s), list(resolutions).index(r), :len(p)] = p
+    return ((("solver", "resolution", f"{o.name}_point", f"{o.name}_coordinate")), arr,
+            {"units": "m", "long_name": f"crack path at the last record of {o!r} (origin, "
+                                        "centroids, tip; NaN-padded)"})
 
 
 def _summary(statuses) -> str:

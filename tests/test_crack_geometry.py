@@ -227,3 +227,19 @@ def test_crack_tip_in_the_scene_dataset():
     out = solve("csph", sc, 20)
     got = ds["tip_length"].sel(solver="csph", resolution=20).values
     assert np.allclose(got, np.interp(ds["time"].values, out["time"], out["tip_length"]))
+
+
+def test_crack_path_in_the_result_and_the_dataset():
+    """The path at the last record: in the driver's result (origin first, tip last) and, padded,
+    in the generic study's dataset."""
+    from sph.driver import solve
+    from studies import scene as study
+
+    sc = _notched_scene()
+    out = solve("csph", sc, 20)
+    path = out["tip_path"]
+    assert np.allclose(path[-1], [out["tip_x"][-1], out["tip_y"][-1]])
+    assert np.allclose(path[0], [0.003, 0.005 + 0.25 * 0.01 / 20])
+    ds = study.run(sc, solvers=["csph"], resolutions=[20])
+    p = ds["tip_path"].sel(solver="csph", resolution=20).values
+    assert np.allclose(p[:len(path)], path) and np.isnan(p[len(path):]).all()

@@ -440,7 +440,10 @@ class CrackTip:
     (counter-clockwise positive in 2-D, 0..180 in 3-D), and ``<name>_speed`` the tip speed, m/s
     (the difference quotient of the length between records; per unit load parameter in a static
     drive). ``spacing``: the bin width along the path in units of the particle spacing (default
-    2: a crack band two particles wide makes one point per bin)."""
+    2: a crack band two particles wide makes one point per bin). The run's result also holds
+    ``<name>_path`` (K, d), m: the path (origin, centroids, tip) at the last record — in the
+    generic study's dataset a NaN-padded variable over (``<name>_point``,
+    ``<name>_coordinate``)."""
 
     name: str
     origin: object
