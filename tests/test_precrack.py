@@ -287,3 +287,17 @@ def test_precrack_across_a_symmetry_plane(method):
     whole = solve(method, CentreCrackPlate(), 18)["stretch"][-1]
     half = solve(method, Half(), 18)["stretch"][-1]
     assert half == pytest.approx(whole, rel=1e-10)
+
+
+def test_cli_refuses_the_fem_for_a_precrack(tmp_path, capsys):
+    """`workbench run my_scene.py --solver fem` on a scene with a pre-crack: exit 2, one line
+    naming the pre-crack and the methods that can run it, before any run."""
+    from app import cli
+
+    f = tmp_path / "cracked.py"
+    f.write_text("from workbench.scenes.centre_crack import CentreCrackPlate\n\n\n"
+                 "class Cracked(CentreCrackPlate):\n    pass\n")
+    assert cli.main(["run", str(f), "--solver", "fem", "--resolution", "4",
+                     "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pre-crack 'crack'" in err and "csph" in err, err
