@@ -476,7 +476,8 @@ class Run:
             if drive.disorder_set is not None:
                 mask = np.zeros(ps.n, bool)
                 mask[ps.sets[drive.disorder_set]] = True
-            dis = Disorder(ps.X, ps.dx, body=ps.body if len(ps.body_names) > 1 else None, mask=mask)
+            dis = Disorder(ps.X, ps.dx, body=ps.body if len(ps.body_names) > 1 else None, mask=mask,
+                           cracks=ps.cracks)
         snap = Snapshots.open(fields, snap_name, ps.X, ps.table, body.field_state, n_steps, chunk,
                               field_frames)
         names = [n for o in self.model.observables if not isinstance(o, M.Period)

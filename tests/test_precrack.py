@@ -301,3 +301,17 @@ def test_cli_refuses_the_fem_for_a_precrack(tmp_path, capsys):
                      "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "pre-crack 'crack'" in err and "csph" in err, err
+
+
+def test_disorder_monitor_does_not_read_an_open_precrack_as_disorder():
+    """The particle-disorder monitor (sph.monitor.Disorder, classic SPH's default criterion) fits
+    an affine map on each particle's reference neighbourhood: across a pre-crack whose faces
+    have opened it would read the opening as disorder. With the crack's facets its
+    neighbourhoods stop at the crack: the two sides pulled rigidly apart are not disordered
+    (η = 0 to round-off), where the uncut neighbourhoods see η of order one at the crack."""
+    from sph.monitor import Disorder
+
+    ps = discretise(_plate((M.PreCrack("c", ((-0.1, 0.55), (1.1, 0.55))),)), 10)
+    x = ps.X + np.where((ps.X[:, 1] > 0.55)[:, None], [0.0, 0.05], [0.0, 0.0])
+    assert Disorder(ps.X, ps.dx, cracks=ps.cracks)(x)[1] < 1e-12
+    assert Disorder(ps.X, ps.dx)(x)[1] > 0.1
