@@ -10,6 +10,9 @@ as data — regions, named sets, constraints, loads, drive, observables — that
 - :mod:`.rc_beam` — the reinforced mortar beam under drop-weight impact of 003 (quarter model);
 - :mod:`.verification` — scenes written only with the API, with exact or classical answers (a 3-D
   cantilever, a bi-material bar).
+- :mod:`.cracks` — :class:`~.cracks.PreCrack` and :class:`~.cracks.CrackTip` (part of
+  :mod:`.model`); :mod:`.centre_crack` — a plate with a zero-width centre pre-crack under tension
+  and its closed-form compliance (``workbench run centre_crack``).
 
 A user's own scene is a :class:`Scene` subclass whose :meth:`~Scene.model` returns a
 :class:`~.model.Model` (README: "Your own scene").
