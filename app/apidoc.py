@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 MODULES = ("workbench.scenes.params", "workbench.scenes.shapes", "workbench.scenes.model",
-           "workbench.materials")
+           "workbench.scenes.cracks", "workbench.crack_geometry", "workbench.materials")
 """The modules of the scene vocabulary, in the order a user meets them."""
 
 

@@ -270,7 +270,11 @@ def _validated(args):
             raise UsageError(f"{err}; or a scene file (my_scene.py)") from None
         scene = with_overrides(study.SCENE(), _parse_sets(args.set))
         allowed = study.SOLVERS
+    cracks = scene.model().cracks if is_scene_file(args.study) else ()
     for s in args.solver or []:
+        if s == "fem" and cracks:
+            raise UsageError(f"--solver: 'fem' does not cut elements along pre-crack "
+                             f"'{cracks[0].name}'; allowed: {', '.join(allowed)}")
         if s not in allowed:
             raise UsageError(f"--solver: {s!r} is not supported by {args.study}; allowed: "
                              f"{', '.join(allowed)}")

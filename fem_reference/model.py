@@ -304,6 +304,11 @@ def discretise(model: M.Model, resolution: int, element=None, fbar=None,
                              "of a ring) is not meshed by the FEM; use the particle methods")
     if model.contact:
         raise SceneError("contact: the FEM has no contact between bodies; use the particle methods")
+    if model.cracks:
+        raise SceneError(f"pre-crack '{model.cracks[0].name}': the FEM does not cut elements along "
+                         "a crack; use the particle methods (csph, csph_bl, hpm, sph)")
+    if any(isinstance(o, M.CrackTip) for o in model.observables):
+        raise SceneError("observable CrackTip: not measured by the FEM; use the particle methods")
     if len({r.body for r in model.regions if not r.held}) > 1:
         raise SceneError("regions: the FEM meshes one body (the model has "
                          f"{', '.join(model.bodies)})")

@@ -530,11 +530,13 @@ class Body:
     reduction of 003 §4.2(2) across fully released mortar particles (:func:`kernel_factors`;
     needs ``stress='hyperelastic'``, the mortar's path); ``viscous_work``: the viscosity's
     dissipation into :attr:`viscous_work` (:func:`viscous_step_work`); ``skin``: the neighbour
-    list's skin, × Δx (:meth:`_refresh_neighbours`; 0: searched every step)."""
+    list's skin, × Δx (:meth:`_refresh_neighbours`; 0: searched every step); ``cracks`` (K, d, d)
+    or None: pre-crack facets — no pair whose *reference* segment X_a–X_b crosses one
+    interacts, at every search (:func:`sph.neighbours.cut_pairs`)."""
 
     def __init__(self, X, V, material, dx, h_ratio=1.3, stress="hypoelastic", alpha=1.0, beta=1.0,
                  artificial_stress=0.0, n_as=4, fixed=None, v0=None, body=None, mat_id=None,
-                 viscous_work=False, kernel_reduction=False, mirrors=(), skin=0.1):
+                 viscous_work=False, kernel_reduction=False, mirrors=(), skin=0.1, cracks=None):
         if stress not in STRESS_LAWS:
             raise ValueError(f"stress: {stress!r} is not one of {STRESS_LAWS}")
         if not (isinstance(h_ratio, (int, float)) and 0.5 <= h_ratio <= 3.0):
@@ -616,6 +618,7 @@ class Body:
         self.m_full = self.m / 0.5 ** self._on.sum(axis=1)  # a plane particle's whole mass
         self._ghosts = None
         self.skin = float(skin) * self.dx
+        self.cracks = None if cracks is None or not len(cracks) else np.ascontiguousarray(cracks)
         self._x_listed = None  # positions at the last neighbour search
         self.searches = 0  # neighbour searches so far
         self._accelerations(0.0, kick=False)
@@ -641,7 +644,13 @@ class Body:
             x = np.concatenate([x, self._ghosts[1] * x[src] + self._ghosts[2]])
             if body is not None:
                 body = np.concatenate([body, body[src]])
-        indptr, indices = neighbour_list(x, reach, body)
+        cut = None
+        if self.cracks is not None:  # the pairs' reference segments (ghosts: mirrored)
+            X = self.X
+            if self.mirrors:
+                X = np.concatenate([X, self._ghosts[1] * X[src] + self._ghosts[2]])
+            cut = (X, self.cracks)
+        indptr, indices = neighbour_list(x, reach, body, cut)
         if self.mirrors:
             indptr, indices = indptr[:N + 1], indices[:indptr[N]]
         return indptr, indices
@@ -827,7 +836,8 @@ class Classic(ParticleBody):
                       artificial_stress, n_as, body=ps.body if len(ps.body_names) > 1 else None,
                       mat_id=ps.mat_id, viscous_work=viscous_work,
                       kernel_reduction=kernel_reduction,
-                      mirrors=ps.mirrors if mirror == "auto" else (), skin=skin)
+                      mirrors=ps.mirrors if mirror == "auto" else (), skin=skin,
+                      cracks=ps.cracks)
         self.b.impulse = self.impulse
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc

@@ -94,7 +94,7 @@ from numba import njit, prange
 from scipy.sparse.csgraph import connected_components
 
 from .kernels import JIT, KERNELS, w as kernel_value
-from .neighbours import reverse_pairs, sorted_position
+from .neighbours import _crosses, reverse_pairs, sorted_position
 
 BASES = ("linear", "quadratic")
 WEIGHTS = ("uniform", "kernel", "wls")
@@ -104,7 +104,8 @@ WEIGHTS = ("uniform", "kernel", "wls")
 # Boundary area vectors and dual-cell volumes of a node lattice
 # ================================================================================================
 
-def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, exclude=None):
+def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, exclude=None,
+                     cracks=None):
     """Volumes V_c and boundary area vectors n_c = ∮ N_c N dΓ of lattice nodes.
 
     Each node's dual cell [X_c − Δx/2, X_c + Δx/2]^d is split into 2^d sub-cells of side Δx/2; a
@@ -140,7 +141,14 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
     H/Δx = 40; without it −0.005 %). Each excluded node's volume goes in equal shares to its
     lattice neighbours (±Δx along each axis) in the body and not excluded: Σ V is kept, the first
     moments change by O(V_c Δx) at each such node (no positive rule exact for linears can
-    skip a corner node: it is a vertex of the body)."""
+    skip a corner node: it is a vertex of the body).
+
+    ``cracks`` (K, d, d) or None: pre-crack facets (:func:`workbench.crack_geometry.facets`). The
+    face between two inside sub-cells of different nodes whose reference segment crosses a facet
+    (the pair the neighbour list cuts, :func:`sph.neighbours.cut_pairs`) is exposed on both sides:
+    each side of the crack is a body with a free face on the dual cells' boundary, and the
+    discrete divergence theorem holds on each; the order-2 stencils take no node across a
+    crack."""
     if order not in (1, 2):
         raise ValueError(f"order: {order!r} is not one of 1, 2")
     X = np.asarray(nodes, dtype=np.float64)
@@ -154,7 +162,9 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
     if np.abs(X - (o + I * dx)).max() > 1e-6 * dx:
         raise ValueError("nodes: not on a lattice of spacing dx through origin (off by more than "
                          "1e-6 dx)")
-    signs, ins, faces = _exposed_faces(X, I, o, dx, inside)
+    F = (np.zeros((0, d, d)) if cracks is None or not len(cracks)
+         else np.ascontiguousarray(cracks, dtype=np.float64))
+    signs, ins, faces = _exposed_faces(X, I, o, dx, inside, F)
     area = (0.5 * dx) ** (d - 1)
     V = ins.reshape(N, 2 ** d).sum(axis=1) * (0.5 * dx) ** d  # inside sub-cells of each node
     n = np.zeros((N, d))
@@ -168,7 +178,7 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
         grid[lin] = np.arange(N)
         V, lost = _quadratic_volumes(I - Imin, dims.astype(np.int64), grid,
                                      ins.reshape(N, 2 ** d), signs.astype(np.int64), V > 0,
-                                     _STENCILS, _lagrange_table(), dx)
+                                     _STENCILS, _lagrange_table(), dx, X, F)
     if exclude is not None:
         exclude = np.asarray(exclude, dtype=bool)
         if exclude.shape != (N,):
@@ -177,12 +187,13 @@ def boundary_normals(nodes, dx: float, inside, origin=None, order: int = 1, excl
     return V, n
 
 
-def _exposed_faces(X, I, o, dx: float, inside):
+def _exposed_faces(X, I, o, dx: float, inside, cracks=None):
     """The boundary faces of the half-spacing sub-cells of :func:`boundary_normals`: (signs (2^d, d)
     the sub-cells' sides, ins (N·2^d,) the sub-cells inside, faces [(axis a, direction s, owners of
     the exposed faces, which of them lie half a spacing from their owner)]). A face of a sub-cell
     on the side s of its node lies through the node, or half a spacing from it (on the dual
-    cell's boundary) when the sub-cell is on that side."""
+    cell's boundary) when the sub-cell is on that side. ``cracks`` (K, d, d): a face between
+    sub-cells of two nodes whose segment crosses a facet is exposed too."""
     N, d = X.shape
     signs = np.array(np.meshgrid(*[(0, 1)] * d, indexing="ij")).reshape(d, -1).T  # (2^d, d)
     J = (2 * I[:, None, :] + signs[None]).reshape(-1, d)  # sub-cell indices, half-spacing grid
@@ -200,10 +211,17 @@ def _exposed_faces(X, I, o, dx: float, inside):
         for a in range(d):
             k = k * ext[a] + (Jk[:, a] - lo[a])
         return k
-    keys_in = np.sort(key(J[ins]))
+    k_in = key(J[ins])
+    by_key = np.argsort(k_in)
+    keys_in = k_in[by_key]
     if keys_in.size and np.any(np.diff(keys_in) == 0):
         raise ValueError("nodes: duplicate lattice nodes")
     Jin, own, sin = J[ins], owner[ins], side[ins]
+    cut = cracks is not None and len(cracks) > 0
+    if cut:
+        from workbench.crack_geometry import crosses
+
+        own_sorted = own[by_key]
     faces = []
     for a in range(d):
         for s in (-1, 1):
@@ -213,24 +231,32 @@ def _exposed_faces(X, I, o, dx: float, inside):
             if keys_in.size:
                 pos = np.minimum(np.searchsorted(keys_in, kn), keys_in.size - 1)
                 exposed = keys_in[pos] != kn
+                if cut:  # a face between two nodes' sub-cells across a pre-crack
+                    other = own_sorted[pos]
+                    cand = np.nonzero(~exposed & (other != own))[0]
+                    exposed[cand] = crosses(X[own[cand]], X[other[cand]], cracks)
             else:
                 exposed = np.ones(kn.size, bool)
             faces.append((a, s, own[exposed], sin[exposed, a] == (1 if s > 0 else 0)))
     return signs, ins, faces
 
 
-def off_lattice_faces(nodes, dx: float, inside, origin=None) -> float:
+def off_lattice_faces(nodes, dx: float, inside, origin=None, cracks=None) -> float:
     """The share of the boundary of the body ``inside`` (as :func:`boundary_normals` sees it) that
     lies half a spacing from the lattice nodes instead of through them: 0 for a union of boxes
     whose faces lie on lattice planes (node lattice), 1 for a cell lattice. Where it is not 0 the
     integration-consistent correction extrapolates the gradients of the outermost nodes to a face
     beyond them; on a node lattice with some faces off (a 3-D beam of odd H/Δx on a block whose
     faces are on the lattice) it is ill-posed — the corrections grow to ten times the gradients
-    and the highest frequency forty-fold."""
+    and the highest frequency forty-fold. ``cracks``: pre-crack facets, whose faces
+    (:func:`boundary_normals`) lie on the dual cells' boundary, half a spacing from their nodes —
+    off the lattice: with a pre-crack the highest frequency of the consistent correction grows
+    with the resolution (ω_max Δx/c = 3.3, 7.5, 19 at 10, 18, 34 spacings across a centre-cracked
+    plate, against 2.2 uncracked)."""
     X = np.asarray(nodes, dtype=np.float64)
     o = X[0] if origin is None else np.asarray(origin, dtype=np.float64)
     I = np.rint((X - o) / dx).astype(np.int64)
-    _, _, faces = _exposed_faces(X, I, o, dx, inside)
+    _, _, faces = _exposed_faces(X, I, o, dx, inside, cracks)
     total = sum(f[2].size for f in faces)
     return float(sum(np.count_nonzero(f[3]) for f in faces) / total) if total else 0.0
 
@@ -259,10 +285,11 @@ def _lagrange_table():
 
 
 @njit(**JIT)
-def _quadratic_volumes(I, dims, grid, ins, signs, usable, stencils, table, dx):
+def _quadratic_volumes(I, dims, grid, ins, signs, usable, stencils, table, dx, X, F):
     """V_e = Σ over inside sub-cells s of Π_k table[c_k, side_k, e_k] Δx^d (see
     :func:`boundary_normals`, order 2); the stencil choice c_k per axis in the order of
-    ``stencils``, the first whose 3^d nodes are all usable (body nodes not excluded). Returns
+    ``stencils``, the first whose 3^d nodes are all usable (body nodes not excluded, none across a
+    pre-crack facet of F (K, d, d) from the owner at X (N, d)). Returns
     (V, number of sub-cells left with their owner for want of a stencil)."""
     N, d = I.shape
     V = np.zeros(N)
@@ -298,6 +325,13 @@ def _quadratic_volumes(I, dims, grid, ins, signs, usable, stencils, table, dx):
                     if b < 0 or not usable[b]:
                         valid = False
                         break
+                    if b != a:
+                        for f in range(F.shape[0]):
+                            if _crosses(X, a, b, F, f):
+                                valid = False
+                                break
+                        if not valid:
+                            break
                 if not valid:
                     continue
                 found = True

@@ -22,7 +22,8 @@ extrapolates and raises the highest frequency 2.4-fold (ω_max Δx/c = 6.9 again
 slab; 2.3 against 2.9 on a node lattice), which the explicit step of the CFL estimate does not
 survive; and a node lattice with some faces half a spacing between its planes, where the
 correction is ill-posed: :func:`off_lattice_share`, kept in ``consistency`` when asked for
-explicitly) replaces G by the smallest change
+explicitly; a body with a pre-crack, whose crack faces lie half a spacing from the nodes on either
+side, is such a body: it gets ``"nodal"``) replaces G by the smallest change
 that makes the force patch test exact (:mod:`sph.consistency`: uniform stretch and shear are
 discrete equilibria with free faces, symmetry planes, loaded faces and clamps, at any resolution,
 while F stays exact for affine — and with the quadratic correction quadratic — motions and the
@@ -81,11 +82,13 @@ CORRECTIONS = ("linear", "quadratic")
 
 def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
                kernel: str = "cubic_spline", correction: str = "linear",
-               body=None) -> tl.Discretisation:
+               body=None, cracks=None) -> tl.Discretisation:
     """Neighbours, correction and corrected gradients of the particles X (N, d) with volumes V,
     masses ``m`` (N,) (or a density, kg/m^d), spacing dx and smoothing length h = h_ratio·dx
     (kernel support 2h). ``body`` (N,) int, optional: particles of different bodies are not
-    neighbours (separate bodies meet only through :mod:`sph.contact`).
+    neighbours (separate bodies meet only through :mod:`sph.contact`). ``cracks`` (K, d, d) or
+    None: pre-crack facets; no pair across one (:func:`sph.neighbours.cut_pairs`), the correction
+    computed on the cut list.
 
     ``correction``: ``"linear"`` — Bonet–Lok, eq. 31 and 34 (the paper's CSPH); ``"quadratic"`` —
     :func:`sph.correction.quadratic_gradients` (exact for quadratic fields; the same force and
@@ -102,7 +105,8 @@ def discretise(X, V, m, dx: float, h_ratio: float = DEFAULT_H_RATIO,
     mass = m * V if m.ndim == 0 else np.ascontiguousarray(m)
     kind = kernel_code(kernel)
     h = h_ratio * dx
-    indptr, indices = neighbour_list(X, SUPPORT * h, body)
+    indptr, indices = neighbour_list(X, SUPPORT * h, body,
+                                     None if cracks is None or not len(cracks) else (X, cracks))
     L, ok = correction_matrices(X, V, indptr, indices, h, kind)
     if correction == "quadratic":
         G, ok_q = quadratic_gradients(X, V, indptr, indices, h, kind)
@@ -124,7 +128,7 @@ def wls(ps, re_ratio: float | None = None, body=None) -> tl.Discretisation:
 
     model = hpm.build_model(ps.X, ps.V, ps.table, ps.dx,
                             hpm.RE_RATIO if re_ratio is None else re_ratio, body=body,
-                            mat_id=ps.mat_id)
+                            mat_id=ps.mat_id, cracks=ps.cracks)
     disc = hpm.wls_discretisation(model)
     disc.m = np.ascontiguousarray(ps.m, dtype=np.float64)
     return disc
@@ -141,7 +145,8 @@ def off_lattice_share(ps) -> float:
     if ps.origin is None or ps.domain_shape is None:
         return math.nan
     shape = ps.domain_shape
-    return off_lattice_faces(ps.X, ps.dx, lambda q: shape.contains(q, 0.0), origin=ps.origin)
+    return off_lattice_faces(ps.X, ps.dx, lambda q: shape.contains(q, 0.0), origin=ps.origin,
+                             cracks=ps.cracks)
 
 
 def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
@@ -166,18 +171,20 @@ def consistent(ps, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline
         disc = wls(ps, re_ratio, labels)
         disc.correction = correction
     else:
-        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=labels)
+        disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=labels,
+                          cracks=ps.cracks)
     inside = ps.domain_shape
 
     def predicate(q):
         return inside.contains(q, 0.0)
 
-    _, n1 = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin, order=1)
+    _, n1 = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin, order=1, cracks=ps.cracks)
     edge = np.count_nonzero(np.abs(n1) > 1e-9 * ps.dx ** (d - 1), axis=1) >= 2
     corners = ps.clamped & ps.domain & edge
     V_int, n_int = boundary_normals(ps.X, ps.dx, predicate, origin=ps.origin,
                                     order=2 if disc.correction == "quadratic" else 1,
-                                    exclude=corners if corners.any() else None)
+                                    exclude=corners if corners.any() else None,
+                                    cracks=ps.cracks)
     new, info = consistent_discretisation(disc, V_int, n_int, column_mask(ps.fixed, "dof"),
                                           basis=disc.correction, weights=weights)
     new.correction = disc.correction
@@ -226,7 +233,8 @@ class CSPH(ParticleBody):
         elif gradient == "wls":
             disc = wls(ps, re_ratio, body)
         else:
-            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=body)
+            disc = discretise(ps.X, ps.V, ps.m, ps.dx, h_ratio, kernel, correction, body=body,
+                              cracks=ps.cracks)
         if images is not None:
             from .mirror import restrict
 

@@ -179,6 +179,7 @@ class Run:
         self.ps = ps
         self.body = body
         self.prescribed = [c for c in model.constraints if isinstance(c, M.Prescribed)]
+        self.crack_paths = {}  # CrackTip name -> its path (K, d) at the latest record
         self.fixed = ps.fixed
         self.varying = bool(self.prescribed) or any(
             not isinstance(getattr(ld, "scale", 1.0), (int, float)) and
@@ -273,7 +274,42 @@ class Run:
                 out[o.name] = self._mean_stress(o, state)
             elif isinstance(o, M.FailedFraction):
                 out[o.name] = self._failed_fraction(o, state)
+            elif isinstance(o, M.CrackTip):
+                out.update(self._crack_tip(o, state))
         return out
+
+    def _crack_tip(self, o, state) -> dict:
+        """The :class:`~workbench.scenes.model.CrackTip` ``o`` now: the path of the failed
+        particles of its regions (:meth:`_failed_mask`) from its origin, in the reference
+        configuration (:func:`workbench.crack_geometry.crack_path`); the speed is filled in by
+        :meth:`tip_speeds` once the history is known."""
+        from workbench.crack_geometry import crack_path
+
+        ps = self.ps
+        origin, ref = self.model.tip_origin(o)
+        failed = self._failed_mask(state) & ps.in_regions(o.regions)
+        p = crack_path(ps.X[failed], origin, o.spacing * ps.dx, ref)
+        self.crack_paths[o.name] = p.path
+        names = [n for n, _ in o.outputs(ps.dim)]
+        vals = [*p.tip, p.length, p.angle, math.nan]
+        return dict(zip(names, (float(v) for v in vals)))
+
+    def tip_speeds(self, out: dict, t) -> None:
+        """``<name>_speed`` of each :class:`~workbench.scenes.model.CrackTip` in ``out``: the
+        difference quotient of its length over the records' times (or load values) ``t``, 0 at
+        the first (m/s, or m per unit load parameter); and ``<name>_path`` (K, d), m, the path
+        (origin, centroids, tip) at the last record."""
+        for o in self.model.observables:
+            if not isinstance(o, M.CrackTip):
+                continue
+            out[f"{o.name}_path"] = self.crack_paths.get(o.name)
+            L = np.asarray(out[f"{o.name}_length"], float)
+            tt = np.asarray(t, float)[:len(L)]
+            v = np.zeros(len(L))
+            if len(L) > 1:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    v[1:] = np.diff(L) / np.diff(tt)
+            out[f"{o.name}_speed"] = v
 
     def _mean_stress(self, o, state) -> float:
         from workbench.materials import evaluate
@@ -313,7 +349,7 @@ class Run:
         tlb = self.body.gradient_form()  # None: dynamic relaxation by the method's own step
         drive = self.model.drive
         path = np.asarray(drive.path, dtype=float)
-        names = [o.name for o in self.model.observables]
+        names = [n for o in self.model.observables for n in M.record_names(o, self.ps.dim)]
         out = dict(parameter=path, parameter_name=drive.parameter,
                    wall_time=np.full(len(path), np.nan), iterations=np.zeros(len(path), int),
                    **{n: np.full(len(path), np.nan) for n in names})
@@ -373,6 +409,7 @@ class Run:
         out["wall_time"] = wt - jit
         out["jit_time"] = jit
         out["setup_time"] = setup_time
+        self.tip_speeds(out, path)
         return out
 
     # -- modal ---------------------------------------------------------------------------------
@@ -522,6 +559,7 @@ class Run:
                    # the loop's own rate: JIT compilation left out, as from wall_time
                    particle_steps_per_second=(ps.n * body.steps / (t_loop - jit)
                                               if t_loop - jit > 0 else math.nan))
+        self.tip_speeds(out, out["time"])
         for rule in ordered(rules):
             rule.report(out, status)
         out.setdefault("t_separated", math.nan)
@@ -572,7 +610,7 @@ class Run:
         state = self.body.field_state() if state is None else state
         h = state.get("history")
         out = dict(history=np.zeros((self.ps.n, 0)) if h is None else np.array(h))
-        if any(isinstance(o, M.FailedFraction) for o in self.model.observables):
+        if any(isinstance(o, (M.FailedFraction, M.CrackTip)) for o in self.model.observables):
             out["failed_particles"] = self._failed_mask(state)
         return out
 

@@ -531,12 +531,14 @@ def kondo_stiffness(model: "Model", alpha: float) -> "sp.csr_matrix":
 
 
 def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisation: float = 0.0,
-                body=None, mat_id=None) -> Model:
+                body=None, mat_id=None, cracks=None) -> Model:
     """Reference configuration of an HPM body (eq. 5–6): X (N, d) m, d = 2 or 3; V (N,) volumes;
     ``material`` a :class:`~workbench.materials.Material` or a
     :class:`~workbench.materials.MaterialTable` with ``mat_id`` (N,) its row per particle (default
     all 0); dx the spacing, m; r_e = re_ratio·dx. ``body`` (N,) int, optional: particles of
-    different bodies never interact through the weights (separate bodies, e.g. two rings)."""
+    different bodies never interact through the weights (separate bodies, e.g. two rings).
+    ``cracks`` (K, d, d) or None: pre-crack facets, no pair across one
+    (:func:`sph.neighbours.cut_pairs`)."""
     if not (isinstance(re_ratio, (int, float)) and 1.0 < re_ratio <= 6.0):
         raise ValueError(f"re_ratio: {re_ratio!r} is not allowed; r_e/Δx must lie in (1, 6]")
     if not (isinstance(stabilisation, (int, float)) and 0.0 <= stabilisation <= 10.0):
@@ -553,7 +555,8 @@ def build_model(X, V, material, dx: float, re_ratio: float = RE_RATIO, stabilisa
         raise ValueError(f"mat_id: not allowed; must be ({N},) integers in [0, {len(table)}) "
                          "(rows of the material table)")
     re = re_ratio * dx
-    indptr, indices = neighbour_list(X, re, body)
+    indptr, indices = neighbour_list(X, re, body,
+                                     None if cracks is None or not len(cracks) else (X, cracks))
     nnz = len(indices)
     X_ij = np.empty((nnz, d))
     w = np.empty(nnz)
@@ -723,7 +726,7 @@ class HPM(ParticleBody):
         self.model = build_model(ps.X, ps.V, ps.table, ps.dx, re_ratio,
                                  0.0 if kondo else stabilisation,
                                  body=ps.body if len(ps.body_names) > 1 else None,
-                                 mat_id=ps.mat_id)
+                                 mat_id=ps.mat_id, cracks=ps.cracks)
         self.K_kondo = (kondo_stiffness(self.model, self.stabilisation)
                         if kondo and self.stabilisation > 0 else None)
         self.m = self.model.m

@@ -141,13 +141,16 @@ def _disorder(x, indptr, indices, X_ij, w, Ainv):
 
 class Disorder:
     """η of the module docstring for particles with reference positions X (N, d), spacing dx;
-    ``body`` (N,) labels (no weights across bodies), ``mask`` the monitored particles."""
+    ``body`` (N,) labels (no weights across bodies), ``mask`` the monitored particles, ``cracks``
+    (K, d, d) pre-crack facets or None (no weights across them: a pre-crack that opens is not
+    disorder)."""
 
-    def __init__(self, X, dx, body=None, mask=None):
+    def __init__(self, X, dx, body=None, mask=None, cracks=None):
         from .neighbours import weighted_neighbourhood
 
         X = np.ascontiguousarray(X, dtype=np.float64)
-        indptr, indices, X_ij, w = weighted_neighbourhood(X, DISORDER_RE * dx, body)
+        indptr, indices, X_ij, w = weighted_neighbourhood(
+            X, DISORDER_RE * dx, body, None if cracks is None or not len(cracks) else cracks)
         rows = np.repeat(np.arange(len(X)), np.diff(indptr))
         A = np.zeros((len(X), X.shape[1], X.shape[1]))
         np.add.at(A, rows, w[:, None, None] * X_ij[:, :, None] * X_ij[:, None, :])

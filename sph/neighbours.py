@@ -95,10 +95,13 @@ def _search(x, radius, nc, order, cell_start, cid, body, count_only, indptr, ind
     return counts
 
 
-def neighbour_list(x: np.ndarray, radius: float, body=None) -> tuple[np.ndarray, np.ndarray]:
+def neighbour_list(x: np.ndarray, radius: float, body=None, cut=None) -> tuple[np.ndarray, np.ndarray]:
     """CSR neighbour list of the points ``x`` (N, d), d = 1, 2 or 3, within ``radius`` (m);
     ``body`` (N,) int labels or None: particles of different bodies are never neighbours (they
-    meet through contact only, :mod:`sph.contact`).
+    meet through contact only, :mod:`sph.contact`); ``cut``: None, or (X (N, d) reference
+    positions, facets (K, d, d) of the pre-cracks, :func:`workbench.crack_geometry.facets`) —
+    pairs whose reference segment X_a–X_b crosses a facet are no neighbours
+    (:func:`cut_pairs`).
 
     Returns ``(indptr (N+1,) int64, indices (nnz,) int32)``; self excluded, rows sorted.
     """
@@ -138,7 +141,105 @@ def neighbour_list(x: np.ndarray, radius: float, body=None) -> tuple[np.ndarray,
     np.cumsum(counts, out=indptr[1:])
     indices = np.empty(int(indptr[-1]), np.int32)
     _search(x, radius, nc, order, cell_start, cid, body, False, indptr, indices)
+    if cut is not None and len(cut[1]):
+        indptr, indices = cut_pairs(indptr, indices, *cut)
     return indptr, indices
+
+
+@njit(inline="always", **JIT)
+def _crosses(X, a, b, F, f):
+    """Whether the segment X_a–X_b crosses the facet F[f] (a segment in 2-D, a triangle in 3-D;
+    :mod:`workbench.crack_geometry`: different sides, the positive one closed, and the crossing
+    point in the closed facet)."""
+    d = X.shape[1]
+    pq = 0.0
+    for k in range(d):
+        pq += (X[b, k] - X[a, k]) ** 2
+    if d == 2:
+        t0 = F[f, 1, 0] - F[f, 0, 0]
+        t1 = F[f, 1, 1] - F[f, 0, 1]
+        sp = t0 * (X[a, 1] - F[f, 0, 1]) - t1 * (X[a, 0] - F[f, 0, 0])
+        sq = t0 * (X[b, 1] - F[f, 0, 1]) - t1 * (X[b, 0] - F[f, 0, 0])
+        tol = 1e-12 * math.sqrt(pq * (t0 * t0 + t1 * t1))
+    else:
+        e1 = F[f, 1] - F[f, 0]
+        e2 = F[f, 2] - F[f, 0]
+        n0 = e1[1] * e2[2] - e1[2] * e2[1]
+        n1 = e1[2] * e2[0] - e1[0] * e2[2]
+        n2 = e1[0] * e2[1] - e1[1] * e2[0]
+        sp = (n0 * (X[a, 0] - F[f, 0, 0]) + n1 * (X[a, 1] - F[f, 0, 1])
+              + n2 * (X[a, 2] - F[f, 0, 2]))
+        sq = (n0 * (X[b, 0] - F[f, 0, 0]) + n1 * (X[b, 1] - F[f, 0, 1])
+              + n2 * (X[b, 2] - F[f, 0, 2]))
+        tol = 1e-12 * math.sqrt(pq) * (e1[0] ** 2 + e1[1] ** 2 + e1[2] ** 2)
+    if abs(sp) <= tol:
+        sp = 0.0
+    if abs(sq) <= tol:
+        sq = 0.0
+    if (sp >= 0.0) == (sq >= 0.0):
+        return False
+    lam = sp / (sp - sq)
+    if d == 2:
+        u = 0.0
+        for k in range(2):
+            u += (X[a, k] + lam * (X[b, k] - X[a, k]) - F[f, 0, k]) * (F[f, 1, k] - F[f, 0, k])
+        u /= t0 * t0 + t1 * t1
+        return -1e-12 <= u <= 1.0 + 1e-12
+    p = np.empty(3)
+    for k in range(3):
+        p[k] = X[a, k] + lam * (X[b, k] - X[a, k])
+    nn = n0 * n0 + n1 * n1 + n2 * n2
+    for i in range(3):
+        j = (i + 1) % 3
+        e0 = F[f, j, 0] - F[f, i, 0]
+        e1_ = F[f, j, 1] - F[f, i, 1]
+        e2_ = F[f, j, 2] - F[f, i, 2]
+        r0 = p[0] - F[f, i, 0]
+        r1 = p[1] - F[f, i, 1]
+        r2 = p[2] - F[f, i, 2]
+        c = (n0 * (e1_ * r2 - e2_ * r1) + n1 * (e2_ * r0 - e0 * r2) + n2 * (e0 * r1 - e1_ * r0))
+        if c < -1e-12 * nn:
+            return False
+    return True
+
+
+@njit(parallel=True, **JIT)
+def _keep_pairs(indptr, indices, X, F, lo, hi, keep):
+    """keep[p] = False for the pairs p = (a, b) whose segment X_a–X_b crosses a facet of F (whose
+    bounding box, ``lo``/``hi`` (K, d), the segment's meets)."""
+    N, d = X.shape
+    for a in prange(N):
+        for p in range(indptr[a], indptr[a + 1]):
+            b = indices[p]
+            for f in range(F.shape[0]):
+                near = True
+                for k in range(d):
+                    if (max(X[a, k], X[b, k]) < lo[f, k] or min(X[a, k], X[b, k]) > hi[f, k]):
+                        near = False
+                        break
+                if near and _crosses(X, a, b, F, f):
+                    keep[p] = False
+                    break
+
+
+def cut_pairs(indptr, indices, X, F) -> tuple[np.ndarray, np.ndarray]:
+    """The CSR list (``indptr``, ``indices``) less the pairs (a, b) whose reference segment
+    X_a–X_b (X (N, d) m) crosses a pre-crack facet of F (K, d, d)
+    (:func:`workbench.crack_geometry.facets`), whatever their length: the relation stays symmetric
+    (the test is symmetric in a and b) and the rows sorted. Once per list: the methods compute
+    their corrections on the cut lists."""
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.float64)
+    tol = 1e-12 * max(1.0, float(np.abs(F).max()))
+    lo = np.ascontiguousarray(F.min(axis=1) - tol)
+    hi = np.ascontiguousarray(F.max(axis=1) + tol)
+    keep = np.ones(indices.shape[0], np.bool_)
+    _keep_pairs(indptr, indices, X, F, lo, hi, keep)
+    rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+    counts = np.bincount(rows[keep], minlength=len(indptr) - 1)
+    new_ptr = np.zeros(len(indptr), np.int64)
+    np.cumsum(counts, out=new_ptr[1:])
+    return new_ptr, np.ascontiguousarray(indices[keep])
 
 
 @njit(parallel=True, **JIT)
@@ -198,12 +299,13 @@ def reverse_pairs(indptr, indices):
     return rev
 
 
-def weighted_neighbourhood(X: np.ndarray, re: float, body=None):
+def weighted_neighbourhood(X: np.ndarray, re: float, body=None, cracks=None):
     """The reference neighbourhood of the weighted-least-squares fits (004 eq. 4–6): pairs within
-    ``re`` (m) of X (N, d), none across the ``body`` (N,) labels, with X_ij = X_j − X_i (P, d) and
-    the weight w = 1 − r²/r_e² (P,). Returns (indptr, indices, X_ij, w)."""
+    ``re`` (m) of X (N, d), none across the ``body`` (N,) labels nor the pre-crack facets
+    ``cracks`` (K, d, d) or None, with X_ij = X_j − X_i (P, d) and the weight w = 1 − r²/r_e² (P,).
+    Returns (indptr, indices, X_ij, w)."""
     X = np.ascontiguousarray(X, dtype=np.float64)
-    indptr, indices = neighbour_list(X, re, body)
+    indptr, indices = neighbour_list(X, re, body, None if cracks is None else (X, cracks))
     rows = np.repeat(np.arange(len(X)), np.diff(indptr))
     X_ij = np.ascontiguousarray(X[indices] - X[rows])
     r2 = np.einsum("pk,pk->p", X_ij, X_ij)

@@ -62,7 +62,10 @@ class Particles:
     clamps); domain (N,) the particles in the closed union of the non-held regions (the body's
     integration domain: a clamp is a face of it), ``domain_shape`` that union and ``origin`` the
     lattice's first point (None off the lattice); mirrors the symmetry planes ((axis, at, set
-    name), ...; :func:`sph.mirror.symmetry_planes`; node lattice only)."""
+    name), ...; :func:`sph.mirror.symmetry_planes`; node lattice only); cracks (K, d, d) the
+    facets of the model's pre-cracks and of their mirror images
+    (:func:`workbench.crack_geometry.facets`): no pair of particles whose reference segment
+    crosses one interacts (:func:`sph.neighbours.cut_pairs`)."""
 
     X: np.ndarray
     V: np.ndarray
@@ -86,6 +89,7 @@ class Particles:
     domain_shape: object = None
     origin: np.ndarray | None = None
     mirrors: tuple = ()
+    cracks: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -94,6 +98,14 @@ class Particles:
     @property
     def dim(self) -> int:
         return self.X.shape[1]
+
+    def cut(self, X=None):
+        """The ``cut`` argument of :func:`sph.neighbours.neighbour_list` for these particles (the
+        reference positions ``X``, default theirs, and the pre-crack facets), None without
+        pre-cracks."""
+        if self.cracks is None or len(self.cracks) == 0:
+            return None
+        return (self.X if X is None else X, self.cracks)
 
     @property
     def rho(self) -> np.ndarray:
@@ -323,6 +335,10 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
         from .mirror import symmetry_planes
 
         ps.mirrors = symmetry_planes(model, ps, tol)
+    if model.cracks:
+        from workbench.crack_geometry import facets
+
+        ps.cracks = facets(model.cracks, d, ps.mirrors)
     return ps
 
 

@@ -27,7 +27,8 @@ class Records:
     def __init__(self, run, n_steps: int, n_out: int, contact):
         self.run, self.body, self.contact = run, run.body, contact
         self.n_steps = n_steps
-        self.names = [o.name for o in run.model.observables if not isinstance(o, M.Period)]
+        self.names = [n for o in run.model.observables if not isinstance(o, M.Period)
+                      for n in M.record_names(o, run.ps.dim)]
         self.observed = {n: [] for n in self.names}
         self.times, self.ke, self.se, self.balance, self.momentum, self.work = [], [], [], [], [], []
         self.diagnostics, self.dissipated = {}, {}
@@ -35,7 +36,7 @@ class Records:
         self.impulse = np.zeros_like(run.ps.X)  # of the constraint forces since the last record
         self.span = 0.0  # the time since the last record, s
         self.every_diag = max(1, n_out // DIAGNOSTIC_RECORDS)
-        self.need_state = any(isinstance(o, (M.MeanStress, M.FailedFraction))
+        self.need_state = any(isinstance(o, (M.MeanStress, M.FailedFraction, M.CrackTip))
                               for o in run.model.observables)
 
     def take(self, on_record=None) -> None:

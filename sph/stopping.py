@@ -114,7 +114,7 @@ class DisorderRule(Rule):
         self.n_steps = None
         self.every = max(1, drive.n_out // 50)
         self.measure = Disorder(ps.X, ps.dx, body=ps.body if len(ps.body_names) > 1 else None,
-                                mask=mask)
+                                mask=mask, cracks=ps.cracks)
         self.history = [self.measure(body.x)[0]]
         self.X = ps.X
 

@@ -14,6 +14,7 @@ STUDIES = {
     "microcantilever": "studies.microcantilever",
     "microcantilever_root": "studies.microcantilever.root",
     "rc_beam": "studies.rc_beam",
+    "centre_crack": "studies.centre_crack",
 }
 # The studies that `workbench verify` runs, in order.
 HEADLINE = ("ss_curve", "cantilever", "plate", "stability", "rc_beam", "microcantilever")

@@ -45,10 +45,14 @@ def solvers_for(model: M.Model) -> tuple:
     """The methods that can run ``model``: the gradient-form particle methods (static, modal and
     explicit drives), classic SPH for explicit and static drives (a static one by dynamic
     relaxation through its own explicit step, as ``sph.driver.solve`` runs it; it has no
-    tangent for a modal one), the FEM where it reads scene models."""
+    tangent for a modal one), the FEM where it reads scene models (not a model with a
+    :class:`~workbench.scenes.model.PreCrack` or a :class:`~workbench.scenes.model.CrackTip`: it
+    cuts no elements)."""
     from sph import METHODS
 
     out = [m for m in METHODS if m != "sph" or not isinstance(model.drive, M.Modal)]
+    if model.cracks or any(isinstance(o, M.CrackTip) for o in model.observables):
+        return tuple(out)
     try:
         import fem_reference
 
@@ -96,7 +100,7 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     else:
         axis = ("mode", np.arange(1, drive.n_modes + 1), {"units": "-"})
     n_ax = len(axis[1])
-    series = {o.name: np.full(shp + (n_ax,), np.nan) for o in obs}
+    series = {n: np.full(shp + (n_ax,), np.nan) for o in obs for n in M.record_names(o, model.dim)}
     if isinstance(drive, M.Explicit):
         series.update({k: np.full(shp + (n_ax,), np.nan) for k in ENERGIES})
     if isinstance(drive, M.Modal):
@@ -138,6 +142,10 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
     units = {M.Displacement: "m", M.Position: "m", M.Reaction: "N", M.MeanStress: "Pa",
              M.FailedFraction: "-"}
     for o in obs:
+        if isinstance(o, M.CrackTip):
+            for n, u in o.outputs(model.dim):
+                data[n] = (dims + (axis[0],), series[n], {"units": u, "long_name": f"{n} of {o!r}"})
+            continue
         data[o.name] = (dims + (axis[0],), series[o.name],
                         {"units": units.get(type(o), "-"), "long_name": repr(o)})
     for name in (*ENERGIES, "period"):
@@ -152,12 +160,30 @@ def run(scene, solvers=None, resolutions=None, quick: bool = False, scheduler: s
         data[name] = (dims, arr, {"units": unit})
     for name, arr in notes.items():
         data[name] = (dims, arr.astype(str), {"units": "-", "long_name": "'ok', or why there is no period"})
+    for o in (o for o in obs if isinstance(o, M.CrackTip)):
+        data[f"{o.name}_path"] = _paths(o, model.dim, solvers, all_res, outs)
     ds = xr.Dataset(data, coords={"solver": solvers, "resolution": all_res,
                                   axis[0]: (axis[0], axis[1], axis[2])})
     ds.attrs.update(results.provenance(scene.name, scene))
     ds.attrs.update(model.describe())
     ds.attrs["plane"] = str(model.plane)
     return ds
+
+
+def _paths(o, dim: int, solvers, resolutions, outs) -> tuple:
+    """The dataset variable ``<name>_path`` of the :class:`~workbench.scenes.model.CrackTip`
+    ``o``: each run's crack path at its last record (origin, centroids, tip), m, padded with NaN
+    to the longest, dims (solver, resolution, ``<name>_point``, ``<name>_coordinate``)."""
+    paths = {k: np.asarray(v.get(f"{o.name}_path"), float).reshape(-1, dim)
+             for k, v in outs.items() if v.get(f"{o.name}_path") is not None}
+    n = max([len(p) for p in paths.values()] + [1])
+    arr = np.full((len(solvers), len(resolutions), n, dim), np.nan)
+    for (s, r), p in paths.items():
+        if s in solvers and r in resolutions:
+            arr[list(solvers).index(s), list(resolutions).index(r), :len(p)] = p
+    return ((("solver", "resolution", f"{o.name}_point", f"{o.name}_coordinate")), arr,
+            {"units": "m", "long_name": f"crack path at the last record of {o!r} (origin, "
+                                        "centroids, tip; NaN-padded)"})
 
 
 def _summary(statuses) -> str:

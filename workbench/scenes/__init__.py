@@ -10,6 +10,9 @@ as data — regions, named sets, constraints, loads, drive, observables — that
 - :mod:`.crack_band` — the mortar bar of the crack-band check;
 - :mod:`.verification` — scenes written only with the API, with exact or classical answers (a 3-D
   cantilever, a bi-material bar).
+- :mod:`.cracks` — :class:`~.cracks.PreCrack` and :class:`~.cracks.CrackTip` (part of
+  :mod:`.model`); :mod:`.centre_crack` — a plate with a zero-width centre pre-crack under tension
+  and its closed-form compliance (``workbench run centre_crack``).
 
 The scenes of the fracture cases live with their case (``studies/rc_beam/scene.py``,
 ``studies/microcantilever/scene.py``); :data:`studies.STUDIES` names every study and its scene.

@@ -20,9 +20,13 @@ A model holds
   :class:`Explicit` (to an end time with a time-step factor), with **stop rules**
   (:class:`Threshold` on an observable; the explicit drive's own energy, disorder and separation
   rules);
+- **pre-cracks** (:class:`PreCrack`): a zero-width crack — a segment in 2-D, a planar convex
+  polygon (e.g. :meth:`PreCrack.rectangle`) in 3-D — that no particle interaction crosses, whatever
+  the kernel's reach;
 - **observables**: :class:`Displacement` of a probe or a set, :class:`Position`,
   :class:`Reaction` on a set, :class:`MeanStress`, :class:`FailedFraction` per region,
-  :class:`Period` of a displacement history; explicit runs always record the energies (kinetic,
+  :class:`Period` of a displacement history, :class:`CrackTip` (tip position, length, kink angle
+  and speed of a growing crack); explicit runs always record the energies (kinetic,
   stored, plastic work, external work, released by failure).
 
 Everything is a frozen dataclass; :meth:`Model.validate` checks the references between the parts
@@ -43,6 +47,7 @@ from typing import Callable
 import numpy as np
 
 from ..materials import Material, MaterialTable
+from .cracks import CrackTip, PreCrack, check_cracks, check_tip
 from .params import SceneError
 from .shapes import Point, Shape
 
@@ -413,7 +418,13 @@ class Momentum:
 
 
 OBSERVABLES = (Displacement, Position, Reaction, MeanStress, FailedFraction, Period, ContactForce,
-               Momentum)
+               Momentum, CrackTip)
+def record_names(o, dim: int) -> tuple:
+    """The names under which the observable ``o`` is recorded: its own name, or for a
+    :class:`CrackTip` each of its quantities (:meth:`CrackTip.outputs`)."""
+    return tuple(n for n, _ in o.outputs(dim)) if isinstance(o, CrackTip) else (o.name,)
+
+
 CONSTRAINTS = (Clamp, Roller, Prescribed)
 LOADS = (Traction, Pressure, PointLoad, BodyForce, InitialVelocity)
 DRIVES = (Static, Modal, Explicit)
@@ -428,7 +439,8 @@ class Model:
     """A scene as data (module docstring). ``length``: the resolution rule, spacing = length /
     resolution. ``plane``: the 2-D idealisation ('strain' or 'stress'; None in 3-D). ``lattice``:
     'node' (particles on the lattice nodes, faces included, volumes by the trapezoid rule) or
-    'cell' (one particle per cell centre) for the particle methods."""
+    'cell' (one particle per cell centre) for the particle methods. ``cracks``: the
+    :class:`PreCrack` s of the body."""
 
     dim: int
     length: float
@@ -443,9 +455,11 @@ class Model:
     contact: tuple = ()
     name: str = "model"
     notes: tuple = field(default=())
+    cracks: tuple = ()
 
     def __post_init__(self):
-        for k in ("regions", "sets", "constraints", "loads", "observables", "contact", "notes"):
+        for k in ("regions", "sets", "constraints", "loads", "observables", "contact", "notes",
+                  "cracks"):
             object.__setattr__(self, k, tuple(getattr(self, k)))
         self.validate()
 
@@ -569,6 +583,7 @@ class Model:
             scale = getattr(item, "scale", None)
             if scale is not None:
                 as_function(scale)
+        check_cracks(self)
         obs_names = {o.name for o in self.observables}
         for o in self.observables:
             if not isinstance(o, OBSERVABLES):
@@ -583,6 +598,8 @@ class Model:
             if isinstance(o, (ContactForce, Momentum)) and o.body not in self.bodies:
                 raise SceneError(f"observable '{o.name}': body '{o.body}' does not exist "
                                  f"(bodies: {', '.join(self.bodies)})")
+            if isinstance(o, CrackTip):
+                check_tip(self, o)
             if isinstance(o, Period):
                 if o.of not in obs_names or not isinstance(self.observable(o.of), Displacement):
                     raise SceneError(f"observable '{o.name}': '{o.of}' is not a Displacement "
@@ -619,19 +636,21 @@ class Model:
             if d.disorder_set is not None and d.disorder_set not in set_names:
                 raise SceneError(f"drive: disorder set '{d.disorder_set}' does not exist")
         for rule in getattr(d, "stop", ()):
-            self._check_stop(rule, obs_names)
+            self._check_stop(rule)
         if isinstance(d, Modal) and not (isinstance(d.n_modes, int) and d.n_modes >= 1):
             raise SceneError(f"drive: n_modes = {d.n_modes!r} is out of range; allowed: integers >= 1")
         return self
 
-    def _check_stop(self, rule, obs_names) -> None:
+    def _check_stop(self, rule) -> None:
         """A stop rule names an observable of the model that has a value at every record, and
         one finite threshold; ``after`` ≥ 0 (0 on a static path: it ends where the rule holds)."""
         if not isinstance(rule, Threshold):
             raise SceneError(f"drive: stop rule {rule!r} is not a Threshold")
-        if rule.of not in obs_names or isinstance(self.observable(rule.of), Period):
+        recorded = [n for o in self.observables if not isinstance(o, Period)
+                    for n in record_names(o, self.dim)]
+        if rule.of not in recorded:
             raise SceneError(f"stop rule on '{rule.of}': no such observable with a value at every "
-                             f"record (observables: {_names(self.observables)})")
+                             f"record (recorded: {', '.join(recorded) or 'none'})")
         bounds = [b for b in (rule.above, rule.below) if b is not None]
         if len(bounds) != 1 or not math.isfinite(bounds[0]):
             raise SceneError(f"stop rule on '{rule.of}': give one finite threshold, above or below")
@@ -640,12 +659,33 @@ class Model:
             raise SceneError(f"stop rule on '{rule.of}': after = {rule.after!r} s is out of range; "
                              f"allowed: " + ("0 on a static path" if limit[1] == 0 else "[0, inf] s"))
 
+    def crack(self, name: str) -> PreCrack:
+        for c in self.cracks:
+            if c.name == name:
+                return c
+        raise SceneError(f"pre-crack '{name}': no such pre-crack (pre-cracks: {_names(self.cracks)})")
+
+    def tip_origin(self, o) -> tuple[np.ndarray, np.ndarray | None]:
+        """The origin (d,) of the :class:`CrackTip` ``o`` and the reference direction of its kink
+        angle ((d,) unit, or None: the path's first leg)."""
+        if isinstance(o.origin, str):
+            pts = np.asarray(self.crack(o.origin).points)
+            origin = pts[-1]
+            ref = pts[-1] - pts[-2] if self.dim == 2 else None
+        else:
+            origin, ref = np.asarray(o.origin, float), None
+        if o.direction is not None:
+            ref = np.asarray(o.direction, float)
+        return origin, (None if ref is None else ref / np.linalg.norm(ref))
+
     def describe(self) -> dict:
         """Dataset attributes: regions with their materials, sets, constraints, loads, drive."""
         out = {"model_dim": self.dim, "model_plane": str(self.plane), "model_lattice": self.lattice,
                "model_regions": "; ".join(f"{r.name}: {r.material.law} E={r.material.E:g} Pa"
                                           f"{' (held)' if r.held else ''}" for r in self.regions),
                "model_drive": repr(self.drive)}
+        if self.cracks:
+            out["model_cracks"] = "; ".join(f"{c.name}: {c.points}" for c in self.cracks)
         if self.notes:
             out["model_notes"] = " ".join(self.notes)
         return out
