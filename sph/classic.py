@@ -829,6 +829,9 @@ class Classic(ParticleBody):
                       kernel_reduction=kernel_reduction,
                       mirrors=ps.mirrors if mirror == "auto" else (), skin=skin)
         self.b.impulse = self.impulse
+        if ps.failed is not None and ps.failed.any():  # the scene's failed regions
+            self.b.hist[:] = ps.initial_history()
+            self.b.hist_new[:] = self.b.hist
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
 

@@ -728,6 +728,9 @@ class HPM(ParticleBody):
                         if kondo and self.stabilisation > 0 else None)
         self.m = self.model.m
         self.st = init(self.model)
+        if ps.failed is not None and ps.failed.any():  # the scene's failed regions (unstressed
+            self.st.h[:] = ps.initial_history()      # at t = 0: the acceleration is the same)
+            self.st.h_new[:] = self.st.h
         if self.K_kondo is not None:
             self.st.acc -= (self.K_kondo @ self.st.x) / self.m[:, None]
         self.x, self.v, self.acc = self.st.x, self.st.v, self.st.acc
