@@ -207,8 +207,8 @@ SERIES = {
     "plastic_work": ("plastic_work", "J", "plastic work (full beam)", 4.0),
     "released_energy": ("released_energy", "J", "energy released by cracking (stress release, "
                         "full beam)", 4.0),
-    "viscous_dissipation": ("viscous_dissipation", "J", "energy dissipated by sph's artificial "
-                            "viscosity (full beam and weight; 0 for csph)", 4.0),
+    "viscous_work": ("viscous_work", "J", "energy dissipated by sph's artificial viscosity "
+                     "(its option viscous_work; full beam and weight; 0 for csph)", 4.0),
     "external_work": ("external_work", "J", "work of loads and prescribed motion (none here)", 4.0),
 }
 
@@ -1489,7 +1489,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     fig, axes = plt.subplots(len(ds.solver), len(specimens), figsize=(6 * len(specimens),
                              3.8 * len(ds.solver)), squeeze=False)
     parts = ("kinetic_energy", "strain_energy", "plastic_work", "released_energy",
-             "viscous_dissipation")
+             "viscous_work")
     for i, s in enumerate(ds.solver.values):
         for j, sp in enumerate(specimens):
             ax = axes[i, j]
