@@ -249,7 +249,8 @@ class CSPH(ParticleBody):
 
         if crack == "auto":  # the mortar's RC beam runs on a quarter with mirror images
             crack = "none" if disc.n_ghost else "visibility"
-        if crack == "visibility" and can_fail(ps.table):
+        starts_failed = ps.failed is not None and bool(ps.failed.any())
+        if crack == "visibility" and (can_fail(ps.table) or starts_failed):
             from .crack import Cracks
 
             if disc.n_ghost:

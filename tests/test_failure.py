@@ -31,8 +31,12 @@ def test_failed_and_set_failed_for_every_law():
     assert failure.damage(TABLE, mat_id, h).tolist() == mask.astype(float).tolist()
     with pytest.raises(ValueError, match="^failed: a 'svk' material cannot fail"):
         failure.set_failed(TABLE, mat_id, h, mat_id == 0)
-    # J2 without a damage limit cannot fail either
-    assert failure.damage_column(Material.j2_linear(200e9, 0.3, 400e6, 1e9)) == -1
+    # J2 without a damage limit does not fail under load, but a point set failed is failed
+    j2_inf = MaterialTable((Material.j2_linear(200e9, 0.3, 400e6, 1e9),))
+    assert not failure.can_fail(j2_inf) and failure.can_fail(TABLE)
+    h = j2_inf.initial_history(np.zeros(2, np.int64))
+    failure.set_failed(j2_inf, np.zeros(2, np.int64), h, np.array([True, False]))
+    assert failure.failed(j2_inf, np.zeros(2, np.int64), h).tolist() == [True, False]
 
 
 def test_a_failed_point_carries_no_tension():

@@ -28,9 +28,10 @@ from .layout import HIST_DAMAGE
 
 def damage_column(material) -> int:
     """The history column holding the damage of a :class:`Material`'s law (failed once ≥ 1), or
-    −1 for a law that cannot fail (the elastic laws; J2 without a damage limit, ε_L = ∞)."""
+    −1 for a law that cannot fail (the elastic laws). J2 has the column whatever its ε_L (without
+    a damage limit, ε_L = ∞, D stays 0 under load, but a point set failed is failed)."""
     if material.law == "j2":
-        return HIST_DAMAGE if np.isfinite(material.eps_L) else -1
+        return HIST_DAMAGE
     if material.law == "mortar":
         return _mortar.H_DAMAGE
     if material.law == "brittle":
@@ -46,8 +47,12 @@ def damage_columns(table) -> np.ndarray:
 
 
 def can_fail(table) -> bool:
-    """Whether some material of the table can fail."""
-    return bool((damage_columns(table) >= 0).any())
+    """Whether some material of the table can fail under load: J2 with a finite ε_L, the mortar,
+    the brittle law."""
+    from . import MaterialTable
+
+    return any(damage_column(m) >= 0 and not (m.law == "j2" and not np.isfinite(m.eps_L))
+               for m in MaterialTable.of(table).materials)
 
 
 def damage(table, mat_id, history) -> np.ndarray:
@@ -94,7 +99,7 @@ def set_failed(table, mat_id, history, mask) -> None:
     if bad.any():
         m = table.materials[int(mat_id[np.flatnonzero(bad)[0]])]
         raise ValueError(f"failed: a {m.law!r} material cannot fail; initially failed points "
-                         "need a law with a failed state (j2 with a finite eps_L, mortar, brittle)")
+                         "need a law with a failed state (j2, mortar, brittle)")
     for k, m in enumerate(table.materials):
         sel = np.flatnonzero(mask & (mat_id == k))
         if not sel.size:

@@ -125,7 +125,7 @@ class Region:
     particles on concentric circles, 004's cylindrical arrangement). ``failed``: the region's
     particles start already failed (cracked: a notch of any width, a damaged zone), as their law
     leaves a failed point (:func:`workbench.materials.failure.set_failed`); the material must be
-    one that can fail (J2 with a finite ε_L, the mortar, the brittle law)."""
+    one with a failed state (J2, the mortar, the brittle law)."""
 
     name: str
     shape: Shape
@@ -511,7 +511,7 @@ class Model:
                                      "region (a rigid block cannot crack)")
                 if damage_column(r.material) < 0:
                     raise SceneError(f"region '{r.name}': failed=True needs a material that can "
-                                     f"fail (j2 with a finite eps_L, mortar, brittle); its law is "
+                                     f"fail (j2, mortar, brittle); its law is "
                                      f"{r.material.law!r}")
         region_names = {r.name for r in self.regions}
         set_names = {s.name for s in self.sets}
