@@ -4,7 +4,7 @@ regularised by G_c over the crack band the method cracks, no plasticity. Law cod
 
 The law
 -------
-* Strain and stress as the library's Saint Venant–Kirchhoff law (law 0): E = ½(FᵀF − I),
+* Strain and stress as the library's Saint Venant–Kirchhoff law (law 0, the same routine): E = ½(FᵀF − I),
   P = F S, with a scalar damage d ∈ [0, 1] acting on the tensile part of a volumetric–deviatoric
   split (Amor, Marigo & Maurini 2009):
   ψ(E, d) = (1 − d) ψ⁺(E) + ψ⁻(E),  ψ⁺ = ½K⟨tr E⟩₊² + μ dev E : dev E,  ψ⁻ = ½K⟨tr E⟩₋²,
@@ -52,7 +52,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .elastic import svk_lame
+from .elastic import svk_point
 from .tensor import INVERTED, JIT, _cofactor, _fail, eigh3
 
 LAW_CODE = 5
@@ -211,7 +211,9 @@ def brittle_point(F, h_old, prm, P, h_new, A, want_tangent):
     h_new[H_W_RELEASED] = h_old[H_W_RELEASED] + 0.5 * (h_old[H_PSI_PLUS] + psi_p) * (d - d_old)
     h_new[H_PSI_PLUS] = psi_p
     lam_d, mu_d = effective_lame(tr, d, lam, mu)
-    return svk_lame(F, lam_d, mu_d, P, A, want_tangent)
+    # Saint Venant–Kirchhoff with the degraded constants: a row (code, λ', μ') as a tuple, so that
+    # the array version of svk_point, the elastic laws' hot path, is compiled untouched
+    return svk_point(F, (0.0, lam_d, mu_d), P, A, want_tangent)
 
 
 @njit(**JIT)

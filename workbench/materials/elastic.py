@@ -22,16 +22,10 @@ from .tensor import JIT, OK, INVERTED, _cofactor, _fail
 # --------------------------------------------------------------------------------------------
 @njit(**JIT)
 def svk_point(F, prm, P, A, want_tangent):
-    """Saint Venant–Kirchhoff with the Lamé constants of the row, λ = prm[1], μ = prm[2]
-    (:func:`svk_lame`)."""
-    return svk_lame(F, prm[1], prm[2], P, A, want_tangent)
-
-
-@njit(inline="always", **JIT)
-def svk_lame(F, lam, mu, P, A, want_tangent):
     """Saint Venant–Kirchhoff: P = F (λ tr E I + 2μ E);
-    A_ijkl = δ_ik S_lj + λ F_ij F_kl + μ b_ik δ_jl + μ F_il F_kj (b = F Fᵀ). Inlined into its
-    callers (the brittle law calls it with its degraded constants)."""
+    A_ijkl = δ_ik S_lj + λ F_ij F_kl + μ b_ik δ_jl + μ F_il F_kj (b = F Fᵀ)."""
+    lam = prm[1]
+    mu = prm[2]
     cof, J = _cofactor(F)
     if not J > 0.0:
         _fail(P, A, want_tangent)
