@@ -342,7 +342,8 @@ class MeanStress:
 @dataclass(frozen=True)
 class FailedFraction:
     """Fraction of the particles (elements) of the named ``regions`` (all when None) whose damage
-    has reached 1."""
+    has reached 1, whatever their law (:func:`workbench.materials.failure.failed`: J2, the
+    mortar, the brittle law)."""
 
     name: str
     regions: tuple | None = None
