@@ -341,6 +341,9 @@ def discretise(model: M.Model, resolution: int, element=None, fbar=None,
                              fm.loads, mat_id=mat_id, deletion=deletion)
     except ValueError as err:
         raise SceneError(str(err)) from None
+    failed = np.array([r.failed for r in model.regions], bool)
+    if failed.any():  # the scene's failed regions: their elements' points start failed
+        fm.problem.failed_elements0 = failed[region]
     return fm
 
 

@@ -135,3 +135,17 @@ def test_a_failed_region_needs_a_law_that_can_fail():
     with pytest.raises(SceneError, match="^region 'grip_left': failed=True needs a material that "
                                          "can fail"):
         dataclasses.replace(mdl, regions=regions)
+
+
+def test_fem_starts_the_failed_region_failed():
+    """The FEM reads the same scene item: the elements of the failed region start failed at every
+    point (fem_reference.observe.failed_elements), the others intact."""
+    from fem_reference.model import build
+    from fem_reference.observe import failed_elements
+
+    for law in ("mortar", "brittle"):
+        sc = Observed(MortarBar(law=law), failed_middle=True)
+        fm = build(sc, 4, element="q4")
+        weak = fm.region == fm.model.regions.index(fm.model.region("weak"))
+        failed = failed_elements(fm.problem, fm.problem.initial_state())
+        assert weak.any() and np.array_equal(failed, weak), law
