@@ -149,3 +149,26 @@ def test_fem_starts_the_failed_region_failed():
         weak = fm.region == fm.model.regions.index(fm.model.region("weak"))
         failed = failed_elements(fm.problem, fm.problem.initial_state())
         assert weak.any() and np.array_equal(failed, weak), law
+
+
+def test_hpm_stored_energy_reads_the_history():
+    """hpm's stored energy of a law with a history is Σ V ψ(F, h) at the committed history (it
+    evaluated every law as virgin, reading history columns it did not have): on the brittle bar
+    (ν = 0) under a uniform stretch E_xx = e, failing every brittle particle removes exactly
+    Σ_brittle V ½ E e² (the grips stay elastic); hpm's gradient is exact for a linear field."""
+    from sph.hpm import HPM
+    from sph.particles import discretise
+
+    sc = MortarBar(law="brittle")
+    ps = discretise(sc.model(sc.B / 4), 4)
+    body = HPM(ps)
+    stretch = 1e-4  # F_xx = 1 + stretch, below the cracking strain f_t/E = 1.35e-4
+    body.x[:, 0] = ps.X[:, 0] * (1 + stretch)
+    e = stretch + 0.5 * stretch ** 2
+    brittle = np.array([m.law == "brittle" for m in ps.table.materials])[ps.mat_id]
+    intact = body.stored_energy()
+    assert intact == pytest.approx(ps.V.sum() * 0.5 * sc.E * e * e, rel=1e-9)
+    failure.set_failed(ps.table, ps.mat_id, body.st.h, brittle)
+    assert intact - body.stored_energy() == pytest.approx(ps.V[brittle].sum() * 0.5 * sc.E * e * e,
+                                                          rel=1e-9)
+    assert set(body.dissipated()) >= {"released_energy"}
