@@ -325,7 +325,7 @@ def discretise(model: M.Model, resolution: int, element=None, fbar=None,
             if r.material not in mats:
                 mats.append(r.material)
             rows[r.name] = mats.index(r.material)
-    table = MaterialTable(tuple(mats))
+    table = MaterialTable(tuple(mats)).with_band(h)  # brittle law: a band of one element
     mat_id = np.array([rows.get(r.name, -1) for r in model.regions], np.int64)[region]
     X = np.ascontiguousarray(disc.basis.doflocs[:, ::d])
     n_nodes = X.shape[1]
@@ -346,6 +346,9 @@ def discretise(model: M.Model, resolution: int, element=None, fbar=None,
                              fm.loads, mat_id=mat_id, deletion=deletion)
     except ValueError as err:
         raise SceneError(str(err)) from None
+    failed = np.array([r.failed for r in model.regions], bool)
+    if failed.any():  # the scene's failed regions: their elements' points start failed
+        fm.problem.failed_elements0 = failed[region]
     return fm
 
 

@@ -53,13 +53,15 @@ def stored_energy(problem, state) -> float:
 
 
 def failed_elements(problem, state=None) -> np.ndarray:
-    """bool (nel,): elements that failed — deleted, or (given ``state``) with D ≥ 1 at every
-    point (a run without deletion)."""
+    """bool (nel,): elements that failed — deleted, or (given ``state``) failed at every point
+    (a run without deletion; failed as :func:`workbench.materials.failure.failed` says, any law)."""
+    from workbench.materials.failure import failed as failed_points
+
     disc = problem.disc
     failed = ~disc.active
     if state is not None:
-        D = problem.damage(state).reshape(disc.nel, disc.nqp)
-        failed = failed | np.all(D >= 1.0, axis=1)
+        pts = failed_points(problem.table, problem.point_mat, state.history)
+        failed = failed | np.all(pts.reshape(disc.nel, disc.nqp), axis=1)
     return failed
 
 

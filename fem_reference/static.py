@@ -158,9 +158,18 @@ class Problem:
             g[np.searchsorted(fixed, self.dirichlet)] = self.fixed_values(lam)
         return g
 
+    failed_elements0 = None
+    """bool (nel,) or None: the elements whose points start failed (a scene's failed regions,
+    set by :func:`fem_reference.model.discretise`; :func:`workbench.materials.failure.set_failed`)."""
+
     def initial_state(self) -> State:
         n = self.disc.nel * self.disc.nqp
-        return State(np.zeros(self.disc.N), self.table.initial_history(self.point_mat), np.ones(n))
+        h = self.table.initial_history(self.point_mat)
+        if self.failed_elements0 is not None and self.failed_elements0.any():
+            from workbench.materials.failure import set_failed
+
+            set_failed(self.table, self.point_mat, h, np.repeat(self.failed_elements0, self.disc.nqp))
+        return State(np.zeros(self.disc.N), h, np.ones(n))
 
     def damage(self, state: State) -> np.ndarray:
         """D (nel·nqp,) of the J2 law (000 eq. 36) in ``state``; 0 at the points of other laws."""

@@ -839,6 +839,9 @@ class Classic(ParticleBody):
                       mirrors=ps.mirrors if mirror == "auto" else (), skin=skin,
                       cracks=ps.cracks)
         self.b.impulse = self.impulse
+        if ps.failed is not None and ps.failed.any():  # the scene's failed regions
+            self.b.hist[:] = ps.initial_history()
+            self.b.hist_new[:] = self.b.hist
         self.m = self.b.m
         self.x, self.v, self.acc = self.b.x, self.b.v, self.b.acc
 
@@ -878,14 +881,14 @@ class Classic(ParticleBody):
     def dissipated(self) -> dict:
         """``plastic_work`` and ``released_energy``, J (the history columns of J2 and the mortar,
         :func:`sph.diagnostics.dissipated_work`, times the reference volumes, the volumes of the
-        stored energy), and with ``viscous_work`` the energy dissipated by the artificial
-        viscosity, ``viscous_dissipation``, J."""
+        stored energy), and with the option ``viscous_work`` the energy dissipated by the
+        artificial viscosity under the same name, ``viscous_work``, J."""
         from .diagnostics import dissipated_work
 
         b = self.b
         out = dissipated_work(b.table, b.mat_id, b.hist, b.V0) if self.b.hyper else {}
         if b.track_viscous:
-            out["viscous_dissipation"] = b.viscous_work
+            out["viscous_work"] = b.viscous_work
         return out
 
     def field_state(self) -> dict:

@@ -1,5 +1,6 @@
 """Cracks in a gradient-form body (CSPH): which neighbour pairs still interact once particles have
-failed (damage D = ε_p/ε_L ≥ 1, paper 000 eq. 36).
+failed (damage D = ε_p/ε_L ≥ 1, paper 000 eq. 36; for any law, :func:`workbench.materials.failure.failed`:
+the mortar fully released along some axis, the brittle law's crack fully open).
 
 The paper says only "stress zero once D ≥ 1". With neighbours fixed in the reference
 configuration that is not enough for a crack to open: an intact particle's deformation gradient

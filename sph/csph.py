@@ -61,11 +61,14 @@ OPTIONS = dict(h_ratio="h/Δx (default 1.1)", kernel="'cubic_spline' | 'wendland
                gradient="'kernel' (default: the corrected kernel gradient) | 'wls' (HPM's "
                         "weighted least squares, eq. 4 of 004, r_e = re_ratio·Δx)",
                re_ratio="r_e/Δx of the 'wls' gradient (default: HPM's)",
-               crack="'visibility' (default: an intact particle stops seeing failed particles and "
-                     "what lies behind them, sph.crack) | 'none' (the pairs never change)",
+               crack="'auto' (default: 'visibility' where a material can fail, except with mirror "
+                     "images, where it is not modelled: 'none') | 'visibility' (an intact particle "
+                     "stops seeing failed particles and what lies behind them, sph.crack; failed "
+                     "as workbench.materials.failure says, any law) | 'none' (the pairs never "
+                     "change)",
                mirror="'auto' (default: the scene's symmetry planes by mirror images, sph.mirror) "
                       "| 'none' (a one-sided stencil at a symmetry plane)")
-CRACKS = ("visibility", "none")
+CRACKS = ("auto", "visibility", "none")
 MIRRORS = ("auto", "none")
 INTEGRATIONS = ("auto", "consistent", "nodal")
 GRADIENTS = ("kernel", "wls")
@@ -200,7 +203,7 @@ class CSPH(ParticleBody):
     def __init__(self, particles, h_ratio: float = DEFAULT_H_RATIO, kernel: str = "cubic_spline",
                  correction: str = DEFAULT_CORRECTION, integration: str = "auto",
                  hourglass: float = 0.0, gradient: str = "kernel", re_ratio: float | None = None,
-                 crack: str = "visibility", mirror: str = "auto"):
+                 crack: str = "auto", mirror: str = "auto"):
         super().__init__(particles)
         if mirror not in MIRRORS:
             raise ValueError(f"mirror: {mirror!r} is not one of {', '.join(map(repr, MIRRORS))}")
@@ -243,14 +246,19 @@ class CSPH(ParticleBody):
                 self.normals = images.w[:, None] * self.normals[:particles.n]
             ps = particles
         self.disc = disc
-        self.tl = tl.Body(disc, ps.table, ps.mat_id, hourglass=hourglass)
+        self.tl = tl.Body(disc, ps.table, ps.mat_id, history=ps.initial_history(),
+                          hourglass=hourglass)
         self.m = disc.m
         self._h_scratch = self.tl.history.copy()
         self._V_work = disc.V_energy.copy()  # the volumes of the plastic and released work
         self.cracks = None
         mats = ps.table.materials
-        breakable = np.array([m.law == "j2" and np.isfinite(m.eps_L) for m in mats], bool)
-        if crack == "visibility" and breakable.any():
+        from workbench.materials.failure import can_fail
+
+        if crack == "auto":  # the mortar's RC beam runs on a quarter with mirror images
+            crack = "none" if disc.n_ghost else "visibility"
+        starts_failed = ps.failed is not None and bool(ps.failed.any())
+        if crack == "visibility" and (can_fail(ps.table) or starts_failed):
             from .crack import Cracks
 
             if disc.n_ghost:
@@ -259,7 +267,7 @@ class CSPH(ParticleBody):
 
             literal = np.array([m.law == "j2" and m.failure == "literal" for m in mats], bool)
             self.cracks = Cracks(self.tl, ps.dx, literal[ps.mat_id])
-            self._j2 = np.array([m.law == "j2" for m in mats], bool)[ps.mat_id]
+            self._update_cracks(True)  # particles that start failed (the scene's failed regions)
 
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
         if extra is not None:
@@ -275,11 +283,11 @@ class CSPH(ParticleBody):
         """New failures (``new``), or failed particles that were compressed and have opened: the
         pairs of the visibility criterion (:mod:`sph.crack`), the stored energy they release added
         to the released energy. Returns whether the pairs changed."""
-        from workbench.materials import HIST_DAMAGE
+        from workbench.materials.failure import failed as failed_points
 
         if not new and not self.cracks.compressed.any():
             return False
-        failed = self._j2 & (self.tl.history[:, HIST_DAMAGE] >= 1.0)
+        failed = failed_points(self.tl.table, self.tl.mat_id, self.tl.history)
         before = self.cracks.updates
         self.cracks.update(failed, self.x, self.stored_energy)
         return self.cracks.updates != before

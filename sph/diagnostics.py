@@ -121,11 +121,14 @@ def work_columns(table) -> tuple[np.ndarray, np.ndarray]:
     material of ``table``, J/m³ of reference volume: (n_mat,) int arrays, −1 where the law keeps
     none. J2 (:mod:`workbench.materials.j2`): W_p in ``HIST_W_P``, W_rel in ``HIST_W_REL``; the
     mortar of 003 (:mod:`workbench.materials.mortar`): W_p in ``H_W_PLASTIC``, W_r in
-    ``H_W_RELEASED``; elastic laws: none."""
+    ``H_W_RELEASED``; the brittle law (:mod:`workbench.materials.brittle`): W_rel in its
+    ``H_W_RELEASED``, no plastic work; elastic laws: none."""
     from workbench.materials import HIST_W_P, HIST_W_REL
+    from workbench.materials import brittle
     from workbench.materials.mortar import H_W_PLASTIC, H_W_RELEASED
 
-    cols = {"j2": (HIST_W_P, HIST_W_REL), "mortar": (H_W_PLASTIC, H_W_RELEASED)}
+    cols = {"j2": (HIST_W_P, HIST_W_REL), "mortar": (H_W_PLASTIC, H_W_RELEASED),
+            "brittle": (-1, brittle.H_W_RELEASED)}
     wp = np.array([cols.get(m.law, (-1, -1))[0] for m in table.materials], np.int64)
     wr = np.array([cols.get(m.law, (-1, -1))[1] for m in table.materials], np.int64)
     return wp, wr
@@ -137,7 +140,7 @@ def dissipated_work(table, mat_id: np.ndarray, history: np.ndarray, V: np.ndarra
     mat_id (N,) rows of ``table``; history (N, n_history); V (N,) the volumes the stored energy is
     integrated with, m³. Empty dict when no material keeps such a history."""
     wp, wr = work_columns(table)
-    if history is None or not (wp >= 0).any() or np.shape(history)[1] == 0:
+    if history is None or not ((wp >= 0).any() or (wr >= 0).any()) or np.shape(history)[1] == 0:
         return {}
     mat_id = np.asarray(mat_id, np.int64)
     h = np.asarray(history)

@@ -329,13 +329,15 @@ class Run:
         return float(np.sum(w * sig[sel, o.i, o.j]) / np.sum(w))
 
     def _failed_mask(self, state) -> np.ndarray:
-        """(N,) bool: the J2 particles whose damage has reached 1 (none without a history)."""
-        from workbench.materials import HIST_DAMAGE
+        """(N,) bool: the failed particles, whatever their law
+        (:func:`workbench.materials.failure.failed`: damage ≥ 1 — J2's D, the mortar fully
+        released along some axis, the brittle law's crack fully opened; none without a history).
+        The one place the particle solvers and observables ask."""
+        from workbench.materials.failure import failed
 
-        if state is None or state.get("history") is None or state["history"].shape[1] <= HIST_DAMAGE:
+        if state is None or state.get("history") is None:
             return np.zeros(self.ps.n, bool)
-        j2 = np.array([m.law == "j2" for m in self.ps.table.materials])[self.ps.mat_id]
-        return j2 & (state["history"][:, HIST_DAMAGE] >= 1.0)
+        return failed(self.ps.table, self.ps.mat_id, state["history"])
 
     def _failed_fraction(self, o, state) -> float:
         sel = self.ps.in_regions(o.regions)

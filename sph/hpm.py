@@ -616,12 +616,15 @@ def forces(model: Model, x: np.ndarray, state: State | None = None) -> np.ndarra
     return internal_force(x, model.indptr, model.indices, model.X_ij, model.w, M, F, model.cs)
 
 
-def potential_energy(model: Model, x: np.ndarray) -> float:
-    """The potential part of the discrete Hamiltonian, Σ V_i ψ(F_i) + H_s, J (J per unit thickness
-    in 2-D); hyperelastic materials (:func:`sph.diagnostics.strain_energy`)."""
+def potential_energy(model: Model, x: np.ndarray, history: np.ndarray | None = None) -> float:
+    """The potential part of the discrete Hamiltonian, Σ V_i ψ(F_i, h_i) + H_s, J (J per unit
+    thickness in 2-D) (:func:`sph.diagnostics.strain_energy`); ``history`` the committed material
+    history (None: virgin), which a law with a history (J2, mortar, brittle) needs."""
     x = np.ascontiguousarray(x, dtype=np.float64)
-    F, _, _, _ = _evaluate(model, x, model.table.initial_history(model.mat_id))
-    e = strain_energy(F, model.V, model.prm, model.mat_id)
+    h = model.table.initial_history(model.mat_id) if history is None else history
+    F, _, _, _ = _evaluate(model, x, h)
+    e = strain_energy(F, model.V, model.prm, model.mat_id,
+                      history=h if model.n_history else None)
     if model.cs.any():
         e += stabilisation_energy(x, model.indptr, model.indices, model.X_ij, model.w, F, model.cs)
     return float(e)
@@ -731,6 +734,9 @@ class HPM(ParticleBody):
                         if kondo and self.stabilisation > 0 else None)
         self.m = self.model.m
         self.st = init(self.model)
+        if ps.failed is not None and ps.failed.any():  # the scene's failed regions (unstressed
+            self.st.h[:] = ps.initial_history()      # at t = 0: the acceleration is the same)
+            self.st.h_new[:] = self.st.h
         if self.K_kondo is not None:
             self.st.acc -= (self.K_kondo @ self.st.x) / self.m[:, None]
         self.x, self.v, self.acc = self.st.x, self.st.v, self.st.acc
@@ -748,6 +754,13 @@ class HPM(ParticleBody):
     def failed(self) -> bool:
         return bool(self.st.status.any())
 
+    def dissipated(self) -> dict:
+        """``plastic_work`` and ``released_energy``, J: the history's work columns times the
+        reference volumes (:func:`sph.diagnostics.dissipated_work`); none for elastic laws."""
+        from .diagnostics import dissipated_work
+
+        return dissipated_work(self.model.table, self.model.mat_id, self.st.h, self.model.V)
+
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
         if extra is not None or self.K_kondo is not None:
             # the generic velocity Verlet: the Kondo force −K x is not in the fused loop
@@ -759,7 +772,7 @@ class HPM(ParticleBody):
         return done
 
     def stored_energy(self) -> float:
-        e = potential_energy(self.model, self.x)
+        e = potential_energy(self.model, self.x, self.st.h)
         if self.K_kondo is not None:
             e += 0.5 * float(np.sum(self.x * (self.K_kondo @ self.x)))
         return e

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from workbench.materials import MaterialTable
+from workbench.materials.brittle import PARTICLE_BAND
 from workbench.scenes.model import Model
 from workbench.scenes.params import SceneError
 from workbench.scenes.shapes import Cylinder, Plane, Point, Union
@@ -90,6 +91,18 @@ class Particles:
     origin: np.ndarray | None = None
     mirrors: tuple = ()
     cracks: np.ndarray | None = None
+    failed: np.ndarray | None = None
+
+    def initial_history(self) -> np.ndarray:
+        """The material history at t = 0 (N, n_history): virgin, but the particles ``failed``
+        (the scene's failed regions, :attr:`workbench.scenes.model.Region.failed`) start failed
+        (:func:`workbench.materials.failure.set_failed`)."""
+        from workbench.materials.failure import set_failed
+
+        h = self.table.initial_history(self.mat_id)
+        if self.failed is not None and self.failed.any():
+            set_failed(self.table, self.mat_id, h, self.failed)
+        return h
 
     @property
     def n(self) -> int:
@@ -267,6 +280,7 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
     lat = [r for r in model.regions if r.arrangement == "lattice"]
     conc = [r for r in model.regions if r.arrangement == "concentric"]
     table, rows = model.materials()
+    table = table.with_band(PARTICLE_BAND * dx)  # the brittle law's crack band: two columns
     Xs, Vs, Ns, regs = [], [], [], []
     lo = kmax = None
     index_of = {}
@@ -307,7 +321,8 @@ def discretise(model: Model, resolution: int, lattice: str | None = None) -> Par
     body = np.array([body_names.index(r.body) for r in model.regions], np.int64)[region]
     held = np.array([r.held for r in model.regions], bool)[region]
     ps = Particles(X, V, dx, mat_id, table, region, body, held, np.concatenate(Ns),
-                   region_names, body_names, mode if lat else "concentric", model.plane)
+                   region_names, body_names, mode if lat else "concentric", model.plane,
+                   failed=np.array([r.failed for r in model.regions], bool)[region])
     for s in model.sets:
         if isinstance(s.shape, Point):
             pr = None

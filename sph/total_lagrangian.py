@@ -496,15 +496,16 @@ def tangent_matrix(disc: Discretisation, A: np.ndarray) -> sp.csr_matrix:
 @njit(parallel=True, fastmath=FASTMATH, **JIT)
 def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, indices, G, GT, V,
              h_a, h_b, prm, mat_id, all_svk, VP, status, hg_indptr, hg_indices, hg_data, imp,
-             dcol, xe, gsrc, gsign, goff, w):
+             dcols, xe, gsrc, gsign, goff, w):
     """``n_steps`` velocity-Verlet steps from the synchronised state (x, v, acc):
     kick–drift; F → P (shared material routine) → V P; force → acceleration → kick.
     ``h_a`` holds the committed history on entry and on exit (``h_b`` is scratch). The hourglass
     stiffness K_s (CSR arrays, empty when off) adds −K_s x to the force. ``imp`` (N, d), or
     (0, d) to skip: adds on every fixed DOF the impulse of the force acting on it,
-    Σ_steps ½ (f_n + f_n+1) dt (:func:`_impulse_row`). ``dcol`` ≥ 0: the damage column of the
-    J2 history — the loop stops after the first step in which a J2 point reaches D ≥ 1 (for the
-    pairs of :mod:`sph.crack` to be updated); −1: no such stop. Returns (steps done, why): why
+    Σ_steps ½ (f_n + f_n+1) dt (:func:`_impulse_row`). ``dcols`` (n_mat,): the damage column
+    of each material's history (:func:`workbench.materials.failure.damage_columns`, −1: cannot
+    fail) — the loop stops after the first step in which a point reaches damage ≥ 1, i.e. fails
+    (for the pairs of :mod:`sph.crack` to be updated); empty: no such stop. Returns (steps done, why): why
     0 all done, 1 a failed material point (status ≠ 0) in the last step, 2 a point newly
     damaged. Symmetry planes (:mod:`sph.mirror`; gsrc empty: none): ``xe`` (N + n_g, d) scratch
     for the positions with the ghosts gsign ⊙ x[gsrc] + goff, the ghosts' V P mirrored after
@@ -521,6 +522,7 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
     # kick–drift is fused into it (one pass less over the particles); the last step of the call
     # stops at the synchronised state.
     fuse = not hg_on
+    watch = dcols.shape[0] > 0
     for a in prange(N):
         kick_drift_row(a, x, v, acc, fixed, v_fix, dt, damping)
     for s in range(n_steps):
@@ -545,8 +547,10 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
                     _stress_row(a, xs, indptr, indices, G, V, h_a, prm, mat_id, False, F, P, A,
                                 h_b, VP, dummyF, dummyA, status)
                     nbad += status[a] != 0
-                if dcol >= 0 and prm[mat_id[a], 0] == 3.0 and h_b[a, dcol] >= 1.0 and h_a[a, dcol] < 1.0:
-                    nnew += 1
+                if watch:
+                    c = dcols[mat_id[a]]
+                    if c >= 0 and h_b[a, c] >= 1.0 and h_a[a, c] < 1.0:
+                        nnew += 1
         for g in prange(ng):
             for i in range(d):
                 for j in range(d):
@@ -682,13 +686,13 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
     in place; ``f_ext`` (N, d) dead forces, ``fixed`` (N, d) uint8 DOFs following ``v_fix``;
     ``impulse`` (N, d) or None: the impulse of the force on each fixed DOF is added to it
     (:func:`_impulse_row`); ``on_damage(new)``, or None: called at the synchronised state after
-    every step in which a J2 point reached D ≥ 1 (``new`` True) and at the end of the call
+    every step in which a point failed (damage ≥ 1, :mod:`workbench.materials.failure`; ``new`` True) and at the end of the call
     (False), for :mod:`sph.crack` to update the pairs; it returns whether they changed, and then
     the acceleration is that of the new pairs (:func:`_new_force`); the steps then go on.
     Bodies under :data:`SERIAL_BELOW` particles run on one thread.
     Returns the steps completed (fewer when a material point failed: J ≤ 0 or the return
     mapping)."""
-    from workbench.materials import HIST_DAMAGE
+    from workbench.materials.failure import damage_columns
 
     import numba
 
@@ -700,7 +704,8 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
     if dsc.n < SERIAL_BELOW:
         numba.set_num_threads(1)
     imp = impulse if impulse is not None else np.zeros((0, x.shape[1]))
-    dcol = HIST_DAMAGE if on_damage is not None and body.history.shape[1] > HIST_DAMAGE else -1
+    dcols = (damage_columns(body.table) if on_damage is not None
+             else np.zeros(0, np.int64))
     d = x.shape[1]
     if dsc.n_ghost:
         mir = (np.empty((dsc.n + dsc.n_ghost, d)), dsc.ghost_src.astype(np.int64),
@@ -714,7 +719,7 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
             k, why = _advance(n_steps - done, x, v, acc, dsc.m, f_ext, fixed, v_fix, dt, damping,
                               dsc.indptr, dsc.indices, dsc.G, dsc.GT, dsc.V, body.history,
                               h_scratch, body.prm, body.mat_id, body.table.all_svk, body.VP,
-                              body.status, *hg, imp, dcol, *mir)
+                              body.status, *hg, imp, dcols, *mir)
             done += int(k)
             if why == 1:
                 break

@@ -36,8 +36,9 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
     ε_0(Δx) Δx, past the elastic stretch);
     ``peak_force`` (the largest force over f_t A); ``residual_force`` (the last record's |force|
     over the largest); ``spacing`` (m)."""
+    from sph.diagnostics import work_columns
     from sph.particles import discretise
-    from workbench.materials.mortar import H_DAMAGE, H_RELEASED, H_W_RELEASED
+    from workbench.materials.failure import damage, failed
 
     dx = scene.B / resolution
     ps = discretise(scene.model(dx), resolution)
@@ -45,7 +46,10 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
     X = np.asarray(out["X"], float)
     names = list(out["region_names"])
     mortar = np.isin(np.asarray(out["region"]), [names.index(n) for n in ("weak", "bar")])
-    released = mortar & (h[:, H_RELEASED] > 0.5)
+    released = mortar & failed(ps.table, ps.mat_id, h)  # fully released (any law)
+    d_all = damage(ps.table, ps.mat_id, h)
+    wr = work_columns(ps.table)[1][ps.mat_id]
+    W_r = np.where(wr >= 0, h[np.arange(len(wr)), np.maximum(wr, 0)], 0.0)
     GF = scene.fracture_energy(dx)
     W = np.asarray(out["released_energy"], float)
     F = np.abs(np.asarray(out["force"], float))
@@ -54,7 +58,7 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
     k = int(np.argmax(F))
     sep = np.flatnonzero((np.arange(len(F)) > k) & (F <= SEPARATION * F[k]))
     W_sep = float(W[sep[0]]) if sep.size else math.nan
-    w = np.where(mortar, h[:, H_W_RELEASED], 0.0) * ps.V
+    w = np.where(mortar, W_r, 0.0) * ps.V
     column = np.round((X[:, 0] - scene.weak_section(dx)) / dx).astype(int)
     band = sorted(set(column[released].tolist()))
     in_band = mortar & np.isin(column, band)
@@ -65,7 +69,7 @@ def crack_band(scene: MortarBar, resolution: int, out: dict) -> dict:
                 full=float(w[released].sum()) / (A * GF),
                 partial=float(w[~released].sum()) / (A * GF),
                 band=band,
-                band_min_damage=float(h[in_band, H_DAMAGE].min()) if band else math.nan,
+                band_min_damage=float(d_all[in_band].min()) if band else math.nan,
                 separation_opening=float(opening[sep[0]] / u0) if sep.size else math.nan,
                 peak_force=float(F[k]) / (scene.f_t * A),
                 residual_force=float(F[-1] / F[k]) if F[k] > 0 else math.nan,

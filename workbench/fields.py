@@ -176,15 +176,18 @@ def check_frames(frames) -> int:
 def particle_point_data(material, X, x, v, F=None, history=None, sigma=None, mat_id=None,
                         region=None) -> dict:
     """Point data of one particle snapshot: ``displacement`` x − X (m), ``velocity`` (m/s),
-    ``stress`` (Cauchy, 3×3, Pa; plane strain keeps σ_zz), ``von_mises`` (Pa), and where a J2
-    material is present ``plastic_strain`` (equivalent plastic strain ε_p, -) and ``damage``
-    (D, -); ``region`` (the region index of each particle) when given.
+    ``stress`` (Cauchy, 3×3, Pa; plane strain keeps σ_zz), ``von_mises`` (Pa), where a J2
+    material is present ``plastic_strain`` (equivalent plastic strain ε_p, -), and where a
+    material can fail ``damage`` (in [0, 1], failed at 1, any law:
+    :func:`workbench.materials.failure.damage`); ``region`` (the region index of each particle)
+    when given.
 
     ``material``: a Material or a MaterialTable (then ``mat_id`` gives each particle's row). The
     Cauchy stress is ``sigma`` when the method carries it (classic SPH), else it is evaluated from
     the deformation gradients F (N, 3, 3) and the committed ``history`` by the shared material
     routine (no new stress state is created; the history is not changed)."""
     from .materials import HIST_DAMAGE, HIST_EPS_P, MaterialTable, evaluate
+    from .materials.failure import can_fail, damage
 
     table = MaterialTable.of(material)
     x = np.asarray(x, dtype=float)
@@ -209,6 +212,9 @@ def particle_point_data(material, X, x, v, F=None, history=None, sigma=None, mat
             np.zeros(len(x), np.int64) if mat_id is None else np.asarray(mat_id)]
         out["plastic_strain"] = np.where(j2, h[:, HIST_EPS_P], 0.0)
         out["damage"] = np.where(j2, h[:, HIST_DAMAGE], 0.0)
+    if can_fail(table) and history is not None and np.shape(history)[1] > 0:
+        out["damage"] = damage(table, np.zeros(len(x), np.int64) if mat_id is None else mat_id,
+                               history)
     if region is not None:
         out["region"] = np.asarray(region, dtype=float)
     return out

@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from . import __version__
+from .materials import Material
 
 ENGINE = "netcdf4"
 
@@ -160,7 +161,7 @@ def provenance(study: str, scene=None, extra: dict | None = None) -> dict:
         attrs["scene"] = scene.name
         attrs.update(scene.attrs())
         mat = getattr(scene, "material", None)
-        if mat is not None:
+        if isinstance(mat, Material):  # a scene's one material (not a method of that name)
             attrs.update({f"material_{k}" if not k.startswith("material") else k: v
                           for k, v in mat.describe().items()})
     if extra:

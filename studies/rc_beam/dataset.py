@@ -40,8 +40,8 @@ SERIES = {
     "plastic_work": ("plastic_work", "J", "plastic work (full beam)", 4.0),
     "released_energy": ("released_energy", "J", "energy released by cracking (stress release, "
                         "full beam)", 4.0),
-    "viscous_dissipation": ("viscous_dissipation", "J", "energy dissipated by sph's artificial "
-                            "viscosity (full beam and weight; 0 for csph)", 4.0),
+    "viscous_work": ("viscous_work", "J", "energy dissipated by sph's artificial viscosity "
+                     "(its option viscous_work; full beam and weight; 0 for csph)", 4.0),
     "external_work": ("external_work", "J", "work of loads and prescribed motion (none here)", 4.0),
 }
 

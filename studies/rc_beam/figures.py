@@ -78,7 +78,7 @@ def plot(ds: xr.Dataset, outdir) -> list:
     fig, axes = plt.subplots(len(ds.solver), len(specimens), figsize=(6 * len(specimens),
                              3.8 * len(ds.solver)), squeeze=False)
     parts = ("kinetic_energy", "strain_energy", "plastic_work", "released_energy",
-             "viscous_dissipation")
+             "viscous_work")
     for i, s in enumerate(ds.solver.values):
         for j, sp in enumerate(specimens):
             ax = axes[i, j]

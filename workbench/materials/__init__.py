@@ -9,7 +9,8 @@ slot  meaning
 ====  ==========================================================================
 0     law code: 0 Saint Venant–Kirchhoff, 1 compressible neo-Hookean,
       2 Mooney–Rivlin-like (004 eq. 12), 3 finite-strain J2 (Hencky, Swift or linear hardening),
-      4 mortar of 003 (slots 3–9 its own: :mod:`workbench.materials.mortar`)
+      4 mortar of 003 (slots 3–9 its own: :mod:`workbench.materials.mortar`),
+      5 brittle solid with a fracture energy (slots 3–8 its own: :mod:`workbench.materials.brittle`)
 1     Lamé λ, Pa (for law 2: the λ of eq. 12)
 2     shear modulus μ, Pa (law 2: unused, its small-strain value is c1 + c2)
 3     Swift C, Pa            (law 3, Swift);  linear: initial yield stress σ_y0, Pa
@@ -25,7 +26,10 @@ slot  meaning
       J < 1, else 0); see :meth:`Material.j2`
 ====  ==========================================================================
 
-Law code 4 is the mortar law of 003 (:mod:`workbench.materials.mortar`; its own meanings of slots 1–9).
+Law code 4 is the mortar law of 003 (:mod:`workbench.materials.mortar`; its own meanings of slots 1–9);
+law code 5 the brittle law (:mod:`workbench.materials.brittle`: Rankine onset, linear softening
+regularised by G_c over the method's crack band). What "failed" means for each law:
+:mod:`workbench.materials.failure`.
 
 History per point (``n_history`` columns): none for the elastic laws; for J2 thirteen floats,
 ``[Cp⁻¹ (3×3, row-major), ε_p, D, W_p, W_rel]`` with Cp⁻¹ = Fp⁻¹ Fp⁻ᵀ, so that the elastic trial
@@ -90,6 +94,8 @@ class Material:
     eps_release: float = 0.0  # mortar: strain of complete stress release, -
     H_c: float = 0.0          # mortar: linear hardening modulus, Pa
     phi_min: float = 0.05     # mortar: floor of the reduction factor φ
+    G_c: float = 0.0          # brittle (law 5): fracture energy, J/m²
+    band: float = 0.0         # brittle: crack band width, m (0: the method's, MaterialTable.with_band)
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -147,7 +153,14 @@ class Material:
         release (eq. 5–7) on the degraded orthotropic matrix (eq. 8), Mises plasticity with linear
         hardening H_c (default E/99: post-yield slope E/100 in uniaxial stress, Fig. 14). The
         release strain is ``eps_release`` or, by eq. 5, 2 G_f/(f_t · particle_size) (G_f in J/m²,
-        particle_size in m). ρ = 2200 kg/m³ by default (003 gives none)."""
+        particle_size in m). ρ = 2200 kg/m³ by default (003 gives none).
+
+        Eq. 5 assumes a crack band one particle wide, but the particle methods crack a band of two
+        lattice columns (a particle's gradient is formed from its neighbours: a jump between two
+        columns is a strain of both; :mod:`workbench.scenes.crack_band`, docs/fracture.md): a
+        material built from (G_f, particle_size) releases **2 G_f** per unit crack area there. To
+        release G_f, give ``particle_size`` = 2 Δx (or use :meth:`brittle`, whose band is the
+        method's)."""
         from .mortar import release_strain
 
         if eps_release is None:
@@ -159,6 +172,19 @@ class Material:
         H_c = E / 99.0 if H_c is None else H_c
         return cls(law="mortar", E=E, nu=nu, rho=rho, f_t=f_t, f_c=f_c, eps_release=eps_release,
                    H_c=H_c, phi_min=phi_min).validated()
+
+    @classmethod
+    def brittle(cls, E: float, nu: float, f_t: float, G_c: float, rho: float = 7850.0,
+                band: float = 0.0) -> "Material":
+        """A brittle solid (:mod:`workbench.materials.brittle`): elastic (Saint Venant–Kirchhoff)
+        up to the Rankine onset, the largest principal stress reaching f_t (Pa); then linear
+        softening of the damage on the tensile part of a volumetric–deviatoric split, whose
+        energy per unit crack area is G_c (J/m²) over the crack band the method cracks: ``band``
+        (m) or, with 0 (default), the method's own (particle methods 2 Δx, the FEM one element).
+        Where G_c < f_t² b/(2E) the strength is reduced locally to √(2 E G_c/b) (Bažant–Oh):
+        no parameter is capped by the spacing. No plasticity, no compressive failure; a cracked
+        point keeps its bulk stiffness in compression. ρ defaults to a steel's 7850 kg/m³."""
+        return cls(law="brittle", E=E, nu=nu, rho=rho, f_t=f_t, G_c=G_c, band=band).validated()
 
     @classmethod
     def from_bulk_shear(cls, law: str, K: float, G: float, rho: float) -> "Material":
@@ -202,6 +228,10 @@ class Material:
             raise ValueError("c1, c2: must be >= 0 with c1 + c2 > 0")
         if self.law == "mortar":
             from .mortar import check_material
+
+            check_material(self)
+        if self.law == "brittle":
+            from .brittle import check_material
 
             check_material(self)
         return self
@@ -251,6 +281,10 @@ class Material:
             from .mortar import N_HISTORY
 
             return N_HISTORY
+        if self.law == "brittle":
+            from .brittle import N_HISTORY as N_BRITTLE
+
+            return N_BRITTLE
         return N_HISTORY_J2 if self.law == "j2" else 0
 
     def params(self) -> np.ndarray:
@@ -273,6 +307,10 @@ class Material:
             from .mortar import pack_params
 
             pack_params(self, p)
+        if self.law == "brittle":
+            from .brittle import pack_params as pack_brittle
+
+            pack_brittle(self, p)
         return p
 
     def initial_history(self, n_points: int) -> np.ndarray:
@@ -296,6 +334,8 @@ class Material:
         if self.law == "mortar":
             d.update(f_t=self.f_t, f_c=self.f_c, eps_release=self.eps_release, H_c=self.H_c,
                      phi_min=self.phi_min)
+        if self.law == "brittle":
+            d.update(f_t=self.f_t, G_c=self.G_c, band=self.band)
         return d
 
 
@@ -329,6 +369,15 @@ class MaterialTable:
 
     def __getitem__(self, i) -> Material:
         return self.materials[i]
+
+    def with_band(self, band: float) -> "MaterialTable":
+        """The table with the crack band width ``band`` (m) given to every brittle material that
+        leaves it to the method (``band`` = 0): a method calls it with its band at its spacing
+        (:data:`workbench.materials.brittle.PARTICLE_BAND` Δx, the FEM's element size)."""
+        if not any(m.law == "brittle" and m.band == 0 for m in self.materials):
+            return self
+        return MaterialTable(tuple(m.replace(band=band) if m.law == "brittle" and m.band == 0
+                                   else m for m in self.materials))
 
     def params(self) -> np.ndarray:
         """(n_materials, N_PARAMS) float64, row k = ``materials[k].params()``."""
@@ -444,7 +493,8 @@ def energies(material, F: np.ndarray, history: np.ndarray | None = None, mat_id=
     material: a :class:`Material` or :class:`MaterialTable` (``mat_id`` as in :func:`evaluate`).
     F: (N, 3, 3) or (3, 3); history: (N, n_history) of the end of the step (None: virgin).
     Returns ``psi`` the stored energy (:func:`kernels.stored_energy_point`), ``W_p`` the plastic
-    work and ``W_rel`` the energy released at failure (J2 history columns; 0 for other laws),
+    work and ``W_rel`` the energy released at failure (J2 and brittle history columns; 0 for
+    other laws),
     each (N,) (scalars for one F). Multiply by the reference volumes and sum for a body.
     """
     from . import kernels
@@ -465,6 +515,11 @@ def energies(material, F: np.ndarray, history: np.ndarray | None = None, mat_id=
     W_p = np.where(j2, history[:, HIST_W_P], 0.0) if history.shape[1] > HIST_W_P else np.zeros_like(psi)
     W_rel = (np.where(j2, history[:, HIST_W_REL], 0.0) if history.shape[1] > HIST_W_REL
              else np.zeros_like(psi))
+    from .brittle import H_W_RELEASED as _BR_W
+
+    brittle = np.array([m.law == "brittle" for m in table.materials])[mat_id]
+    if brittle.any():
+        W_rel = np.where(brittle, history[:, _BR_W], W_rel)
     res = {"psi": psi, "W_p": W_p, "W_rel": W_rel}
     if single:
         res = {k: float(v[0]) for k, v in res.items()}

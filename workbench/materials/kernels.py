@@ -4,7 +4,8 @@ tangent A = dP/dF and the stored energy, per point and for N points, for every l
 :mod:`workbench.materials.layout`):
 
 0–2 the hyperelastic laws (:mod:`.elastic`: SVK, neo-Hooke, 004's Mooney–Rivlin-like law);
-3 finite-strain J2 (:mod:`.j2`, paper 000); 4 the mortar of paper 003 (:mod:`.mortar`).
+3 finite-strain J2 (:mod:`.j2`, paper 000); 4 the mortar of paper 003 (:mod:`.mortar`); 5 the brittle
+solid with a fracture energy (:mod:`.brittle`).
 
 Entry points: :func:`material_point` (one point, allocation-free for every law, inlined into its
 numba callers — callable from other numba code inside its own ``prange``),
@@ -24,6 +25,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .brittle import N_HISTORY as N_HISTORY_BRITTLE
+from .brittle import brittle_energy, brittle_point
 from .elastic import elastic_energy, mooney_rivlin_point, neo_hooke_point, svk_point  # noqa: F401
 from .j2 import j2_energy, j2_point  # noqa: F401
 from .layout import N_HISTORY_J2, N_PARAMS
@@ -49,6 +52,8 @@ def stored_energy_point(F, h, prm):
         return j2_energy(F, h, prm)
     if law == 4:
         return mortar_energy(F, h, prm)
+    if law == 5:
+        return brittle_energy(F, h, prm)
     return np.nan
 
 
@@ -97,6 +102,8 @@ def material_point(F, h_old, prm, P, h_new, A, want_tangent):
         return j2_point(F, h_old, prm, P, h_new, A, want_tangent)
     if law == 4:
         return mortar_point(F, h_old, prm, P, h_new, A, want_tangent)
+    if law == 5:
+        return brittle_point(F, h_old, prm, P, h_new, A, want_tangent)
     _fail(P, A, want_tangent)
     return UNKNOWN_LAW
 
@@ -110,7 +117,7 @@ def _check(F, h_old, prm, mat_id):
         raise ValueError("prm: a parameter table needs N_PARAMS columns (Material.params())")
     for r in range(prm.shape[0]):
         law = int(prm[r, 0])
-        if law < 0 or law > 4:
+        if law < 0 or law > 5:
             raise ValueError("prm[:, 0]: unknown material law code")
         if law == 3:
             if h_old.shape[1] < N_HISTORY_J2:
@@ -121,6 +128,8 @@ def _check(F, h_old, prm, mat_id):
                 raise ValueError("prm[:, 11]: J2 failure mode must be 0 (literal) or 1 (compression)")
         if law == 4 and h_old.shape[1] < N_HISTORY_MORTAR:
             raise ValueError("h_old: the mortar law needs 23 history columns")
+        if law == 5 and h_old.shape[1] < N_HISTORY_BRITTLE:
+            raise ValueError("h_old: the brittle law needs 4 history columns")
     if F.shape[1] != 3 or F.shape[2] != 3 or h_old.shape[0] != F.shape[0]:
         raise ValueError("F must be (N, 3, 3) and h_old (N, n_history)")
     if mat_id.shape[0] != F.shape[0]:
@@ -152,6 +161,8 @@ def _points_into(F, h_old, prm, mat_id, P, h_new, A, status, want_tangent):
             status[n] = mooney_rivlin_point(F[n], row, P[n], A[m], want_tangent)
         elif law == 4:
             status[n] = mortar_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
+        elif law == 5:
+            status[n] = brittle_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
         else:
             status[n] = j2_point(F[n], h_old[n], row, P[n], h_new[n], A[m], want_tangent)
 

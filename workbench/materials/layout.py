@@ -3,7 +3,7 @@ point): the constants every module of :mod:`workbench.materials` shares (the tab
 the package docstring)."""
 from __future__ import annotations
 
-LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3, "mortar": 4}
+LAW_CODES = {"svk": 0, "neo_hooke": 1, "mooney_rivlin": 2, "j2": 3, "mortar": 4, "brittle": 5}
 HARDENING_CODES = {"swift": 0, "linear": 1}
 FAILURE_CODES = {"literal": 0, "compression": 1}
 N_PARAMS = 12

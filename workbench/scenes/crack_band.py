@@ -57,6 +57,11 @@ stress (:mod:`workbench.materials.mortar`; plus the midpoint rule's E Δε²/8 f
 increment of one time step). So the energy released per crack area B (per unit thickness) over
 G_F(Δx) counts the particle layers the crack consumed (:func:`crack_band`).
 
+The same bar of the **brittle law** (``law='brittle'``, :meth:`Material.brittle`, issue 41): the
+fracture energy ``G_c`` is a material constant and the law spreads it over the method's band,
+2 Δx (:data:`workbench.materials.brittle.PARTICLE_BAND`), so the energy released per crack area
+should be G_c itself at every spacing (tests/test_crack_band.py, docs/fracture.md).
+
 Observed: ``force`` (N/m, the reaction on the right end, the time mean over each record
 interval), ``opening`` (m, the right end's displacement; the left end's is its negative).
 """
@@ -70,6 +75,7 @@ import numpy as np
 import workbench.scenes.model as m
 
 from ..materials import Material
+from ..materials.brittle import PARTICLE_BAND, band_constants
 from ..materials.mortar import fracture_energy
 from ..materials.mortar_constants import PAPER_SPACING
 from .params import ParameterError, Scene, param
@@ -84,6 +90,11 @@ class MortarBar(Scene):
     name: str = field(default="mortar_bar", metadata=dict(hidden=True))
     dim: int = param(2, "-", "2 (plane strain, B high) or 3 (a square section B x B)",
                      choices=(2, 3))
+    law: str = param("mortar", "-", "the softening law: 003's mortar (release strain by eq. 5) or "
+                     "the brittle law (Material.brittle, G_c over the method's band)",
+                     choices=("mortar", "brittle"))
+    G_c: float = param(68.4, "J/m^2", "fracture energy of the brittle law (68.4: 003's mortar, "
+                       "1.61 MPa x 17 000 µ x 5 mm / 2)", lo=0, lo_open=True)
     L: float = param(0.05, "m", "length (grips included)", lo=0, lo_open=True, hi=10)
     B: float = param(0.02, "m", "height (and width in 3-D): the crack's area is B (per unit "
                      "thickness) or B^2", lo=0, lo_open=True, hi=10)
@@ -117,20 +128,33 @@ class MortarBar(Scene):
     # -- the law at a spacing -----------------------------------------------------------------
     def release_strain(self, dx: float) -> float:
         """ε_0 at spacing dx: ``eps_release`` · 5 mm/dx with ``scale_release`` (eq. 5), else
-        ``eps_release`` (as :meth:`RCBeam.release_strain`)."""
+        ``eps_release`` (as :meth:`RCBeam.release_strain`); the brittle law: its ε_f at the
+        particle methods' band 2 dx (:func:`workbench.materials.brittle.band_constants`)."""
+        if self.law == "brittle":
+            return band_constants(self.E, self.f_t, self.G_c, PARTICLE_BAND * dx)[2]
         return self.eps_release * (PAPER_SPACING / dx if self.scale_release else 1.0)
 
     def fracture_energy(self, dx: float) -> float:
         """G_F(dx) = ½ f_t ε_0(dx) dx, J/m² (:func:`workbench.materials.mortar.fracture_energy`):
         the energy per crack area of a band one particle wide. With ``scale_release`` the same at
-        every spacing (68.4 J/m² for 003's mortar)."""
+        every spacing (68.4 J/m² for 003's mortar). The brittle law: ``G_c``, the energy per
+        crack area it is built to release (whatever the band)."""
+        if self.law == "brittle":
+            return self.G_c
         return fracture_energy(self.f_t, self.release_strain(dx), dx)
 
     def mortar(self, dx: float, strength: float = 1.0) -> Material:
         """The mortar at spacing dx with the tensile strength ``strength`` · f_t and the fracture
         energy G_F(dx) (:meth:`fracture_energy`; ε_0 = 2 G_F(dx)/(strength f_t dx), eq. 5): the
-        weak section differs in strength only, so every released layer releases G_F(dx)."""
+        weak section differs in strength only, so every released layer releases G_F(dx). With
+        ``law='brittle'``: the brittle law of that strength and ``G_c`` (its band is the
+        method's)."""
         f_t = strength * self.f_t
+        if self.law == "brittle":
+            try:
+                return Material.brittle(E=self.E, nu=self.nu, f_t=f_t, G_c=self.G_c, rho=self.rho)
+            except ValueError as err:
+                raise ParameterError(str(err)) from None
         eps0 = 2.0 * self.fracture_energy(dx) / (f_t * dx)
         try:
             return Material.mortar(E=self.E, nu=self.nu, f_t=f_t, f_c=self.f_c, eps_release=eps0,

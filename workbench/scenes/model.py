@@ -129,7 +129,10 @@ class Region:
     clamps its interface with the body. ``body``: the name of the body the region belongs to;
     particles of different bodies interact only through :class:`Contact`. ``arrangement``:
     ``'lattice'`` (the model's lattice, the default) or ``'concentric'`` (2-D annulus only:
-    particles on concentric circles, 004's cylindrical arrangement)."""
+    particles on concentric circles, 004's cylindrical arrangement). ``failed``: the region's
+    particles start already failed (cracked: a notch of any width, a damaged zone), as their law
+    leaves a failed point (:func:`workbench.materials.failure.set_failed`); the material must be
+    one with a failed state (J2, the mortar, the brittle law)."""
 
     name: str
     shape: Shape
@@ -138,6 +141,7 @@ class Region:
     held: bool = False
     body: str = "body"
     arrangement: str = "lattice"
+    failed: bool = False
 
 
 @dataclass(frozen=True)
@@ -376,7 +380,8 @@ class MeanStress:
 @dataclass(frozen=True)
 class FailedFraction:
     """Fraction of the particles (elements) of the named ``regions`` (all when None) whose damage
-    has reached 1."""
+    has reached 1, whatever their law (:func:`workbench.materials.failure.failed`: J2, the
+    mortar, the brittle law)."""
 
     name: str
     regions: tuple | None = None
@@ -546,6 +551,16 @@ class Model:
             if r.arrangement not in ("lattice", "concentric"):
                 raise SceneError(f"region '{r.name}': arrangement {r.arrangement!r} is not one of "
                                  "'lattice', 'concentric'")
+            if r.failed:
+                from ..materials.failure import damage_column
+
+                if r.held:
+                    raise SceneError(f"region '{r.name}': failed=True is not allowed on a held "
+                                     "region (a rigid block cannot crack)")
+                if damage_column(r.material) < 0:
+                    raise SceneError(f"region '{r.name}': failed=True needs a material that can "
+                                     f"fail (j2, mortar, brittle); its law is "
+                                     f"{r.material.law!r}")
         region_names = {r.name for r in self.regions}
         set_names = {s.name for s in self.sets}
         for s in self.sets:
