@@ -13,6 +13,7 @@ STUDIES = {
     "stability": "studies.stability",
     "microcantilever": "studies.microcantilever",
     "microcantilever_root": "studies.microcantilever.root",
+    "microcantilever_mode": "studies.microcantilever.mode",
     "rc_beam": "studies.rc_beam",
     "centre_crack": "studies.centre_crack",
 }

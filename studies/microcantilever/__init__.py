@@ -48,7 +48,8 @@ parameters and a model), :mod:`.ladders` (which runs), :mod:`.study` (:func:`run
 ladder), :mod:`.static` (the FEM and static csph references), :mod:`.derive` (what the runs give),
 :mod:`.dataset` (``microcantilever.nc``), :mod:`.gates` (the tolerances with their reasons, the
 gates), :mod:`.report` (the report's notes), :mod:`.figures`, :mod:`.root` (the study
-``microcantilever_root``) and ``notes.md`` (the design and the measurement record). This module
+``microcantilever_root``), :mod:`.mode` (the study ``microcantilever_mode``: the fracture mode
+predicted, on the scene of :mod:`.padded`) and ``notes.md`` (the design and the measurement record). This module
 exposes the study protocol of :mod:`studies` (``studies.get("microcantilever")``) and the gates'
 tolerances (tests import the same constants).
 """
