@@ -164,6 +164,9 @@ class RCBeam(Scene):
     eps_release: float = param(0.017, "-", "strain of full stress release at 5 mm spacing "
                                "(must exceed f_t/E_m)", lo=0, lo_open=True)
     scale_release: bool = param(True, "-", "release strain x 5 mm/spacing (eq. 5, G_F fixed)")
+    phi_min: float = param(0.05, "-", "floor of the mortar's shear reduction factors (003 eq. 6: "
+                           "0.05); near 1 the crack keeps its shear stiffness", lo=0, hi=1,
+                           hi_open=True)
     E_s: float = param(206e9, "Pa", "steel Young's modulus", lo=0, lo_open=True)
     nu_s: float = param(0.3, "-", "steel Poisson's ratio", lo=-1, hi=0.5, lo_open=True,
                         hi_open=True)
@@ -242,7 +245,8 @@ class RCBeam(Scene):
         """The mortar of 003 (Table 1, eq. 5–8) at spacing dx."""
         try:
             return Material.mortar(E=self.E_m, nu=self.nu_m, f_t=self.f_t, f_c=self.f_c,
-                                   eps_release=self.release_strain(dx), rho=self.rho_m)
+                                   eps_release=self.release_strain(dx), rho=self.rho_m,
+                                   phi_min=self.phi_min)
         except ValueError as err:
             raise ParameterError(str(err)) from None
 
