@@ -102,3 +102,20 @@ def test_the_shear_floor_is_a_parameter_of_the_beam():
     assert RCBeam(phi_min=0.999).mortar(0.0125).phi_min == 0.999
     with pytest.raises(ParameterError, match=r"^phi_min: .*allowed: \[0, 1\)"):
         RCBeam(phi_min=1.0)
+
+
+def test_a_plain_beam_has_mortar_where_the_bars_were():
+    """``rebar=False`` (the diagnostic's ``no_rebar``): no steel region in the beam but the plate,
+    and the same particles, the bars' lattice lines now mortar."""
+    from sph.particles import discretise
+
+    def counts(scene):
+        ps = discretise(scene.model(0.02), scene.resolution)
+        return ps.n, {n: int((ps.region == k).sum()) for k, n in enumerate(ps.region_names)}
+
+    n1, with_bars = counts(RCBeam(specimen="A", spacing=0.02))
+    n0, plain = counts(RCBeam(specimen="A", spacing=0.02, rebar=False))
+    bars = sum(v for k, v in with_bars.items() if k == "bar" or k.startswith("stirrup"))
+    assert bars > 0 and n0 == n1
+    assert not any(k == "bar" or k.startswith("stirrup") for k in plain if plain[k])
+    assert plain["mortar"] == with_bars["mortar"] + bars

@@ -38,6 +38,7 @@ SUSPECTS = {
     "release_unscaled": (dict(scale_release=False), {}),
     "slow_impact": (dict(velocity=0.14), {}),
     "shear_kept": (dict(phi_min=0.999), {}),
+    "no_rebar": (dict(rebar=False), {}),
     "consistent": (dict(dt_reference="spectrum", dt_factor=0.9),
                    dict(csph=dict(integration="consistent"))),
 }
@@ -50,7 +51,9 @@ at the paper's 5 mm value (17 000 µ at every spacing); ``slow_impact`` a tenth 
 wave's stress ρ c v a tenth, below f_t: what cracks then is bending, not the wave; run ten times
 as long and compared at the same mid-span displacement); ``consistent`` csph with its
 integration-consistent correction instead of nodal integration (no zero-energy modes; at 0.9 of
-its critical step, ``dt_reference='spectrum'``)."""
+its critical step, ``dt_reference='spectrum'``); ``shear_kept`` the shear floor φ_min of eq. 6 at
+0.999 (a crack keeps its shear stiffness: eq. 7's shear rates release nothing); ``no_rebar`` a
+plain mortar beam (does the mortar alone localise, without a perfectly bonded bar beside it?)."""
 
 
 def p_wave_speed(E: float, nu: float, rho: float) -> float:

@@ -150,6 +150,8 @@ class RCBeam(Scene):
     stirrup_height: float = param(0.06, "m", "stirrup height between the bar levels", lo=0,
                                   lo_open=True)
     stirrups: bool = param(True, "-", "D6 stirrups of specimen A (B has none)")
+    rebar: bool = param(True, "-", "the main bars and stirrups; false: a plain mortar beam (the "
+                        "bars' lattice lines are mortar; a diagnostic of issue 35)")
     plate_length: float = param(0.1, "m", "loading plate length along the span", lo=0,
                                 lo_open=True)
     plate_thickness: float = param(0.01, "m", "loading plate thickness", lo=0, lo_open=True)
@@ -347,7 +349,7 @@ class RCBeam(Scene):
         W = self.whole
         regions = [m.Region("mortar", self.mortar_shape(dx), self.mortar(dx), body="beam"),
                    m.Region("plate", W(Box((0.0, 0.0, H), (xp, B2, top))), steel, priority=1, body="beam")]
-        for name, box, scale, pri in self.bars(dx):
+        for name, box, scale, pri in (self.bars(dx) if self.rebar else ()):
             regions.append(m.Region(name, W(box), self.steel(scale), priority=pri, body="beam"))
         regions.append(m.Region("weight", W(Box((0.0, 0.0, zw), (xp, B2, zw + self.weight_height))),
                                 weight, body="weight"))
