@@ -1,6 +1,7 @@
 """Why the RC beam's damage spreads (issue 35, item 1): short coarse runs that switch one suspect
 off at a time, and what each measures of the mortar's damage; the 1-D closed form of the impact
-wave against the mortar's tensile strength. The measured table and its reading are in
+wave against the mortar's tensile strength; the mortar law's released energy on a crack that
+slides as it opens against its closed form (:func:`tension_shear_reference`). The measured table and its reading are in
 ``notes.md`` ("Why the damage spreads"); ``python -m studies.rc_beam.diagnose`` reruns it.
 
 The measures (:func:`damage_measures`, mortar particles only, by volume):
@@ -217,8 +218,8 @@ def suspect_scene(scene: RCBeam, suspect: str) -> RCBeam:
 
 
 def table(resolution: int = 5, suspects=None, methods=("csph", "sph"), t_end: float = T_DIAG):
-    """Suspect → method → :func:`diagnose` on specimen B over ``t_end`` (the slow impact over ten
-    times as long: the same mid-span displacement needs about ten times the time)."""
+    """Suspect → method → :func:`diagnose` on specimen B over ``t_end`` (give the slow impact ten
+    times as long, ``--t-end``: the same mid-span displacement needs about ten times the time)."""
     base = RCBeam(specimen="B", name="rc_beam_B_diag", t_end=t_end, n_out=N_OUT)
     out = {}
     for s in suspects or SUSPECTS:
