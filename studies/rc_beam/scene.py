@@ -150,6 +150,8 @@ class RCBeam(Scene):
     stirrup_height: float = param(0.06, "m", "stirrup height between the bar levels", lo=0,
                                   lo_open=True)
     stirrups: bool = param(True, "-", "D6 stirrups of specimen A (B has none)")
+    rebar: bool = param(True, "-", "the main bars and stirrups; false: a plain mortar beam (the "
+                        "bars' lattice lines are mortar; a diagnostic of issue 35)")
     plate_length: float = param(0.1, "m", "loading plate length along the span", lo=0,
                                 lo_open=True)
     plate_thickness: float = param(0.01, "m", "loading plate thickness", lo=0, lo_open=True)
@@ -164,6 +166,9 @@ class RCBeam(Scene):
     eps_release: float = param(0.017, "-", "strain of full stress release at 5 mm spacing "
                                "(must exceed f_t/E_m)", lo=0, lo_open=True)
     scale_release: bool = param(True, "-", "release strain x 5 mm/spacing (eq. 5, G_F fixed)")
+    phi_min: float = param(0.05, "-", "floor of the mortar's shear reduction factors (003 eq. 6: "
+                           "0.05); near 1 the crack keeps its shear stiffness", lo=0, hi=1,
+                           hi_open=True)
     E_s: float = param(206e9, "Pa", "steel Young's modulus", lo=0, lo_open=True)
     nu_s: float = param(0.3, "-", "steel Poisson's ratio", lo=-1, hi=0.5, lo_open=True,
                         hi_open=True)
@@ -242,7 +247,8 @@ class RCBeam(Scene):
         """The mortar of 003 (Table 1, eq. 5–8) at spacing dx."""
         try:
             return Material.mortar(E=self.E_m, nu=self.nu_m, f_t=self.f_t, f_c=self.f_c,
-                                   eps_release=self.release_strain(dx), rho=self.rho_m)
+                                   eps_release=self.release_strain(dx), rho=self.rho_m,
+                                   phi_min=self.phi_min)
         except ValueError as err:
             raise ParameterError(str(err)) from None
 
@@ -343,7 +349,7 @@ class RCBeam(Scene):
         W = self.whole
         regions = [m.Region("mortar", self.mortar_shape(dx), self.mortar(dx), body="beam"),
                    m.Region("plate", W(Box((0.0, 0.0, H), (xp, B2, top))), steel, priority=1, body="beam")]
-        for name, box, scale, pri in self.bars(dx):
+        for name, box, scale, pri in (self.bars(dx) if self.rebar else ()):
             regions.append(m.Region(name, W(box), self.steel(scale), priority=pri, body="beam"))
         regions.append(m.Region("weight", W(Box((0.0, 0.0, zw), (xp, B2, zw + self.weight_height))),
                                 weight, body="weight"))
