@@ -673,9 +673,12 @@ def test_band_gate():
                                   "rule": ["compression", "regularised"], "resolution": res},
                           attrs={"param_H": 5e-6, "param_band": 0.0})
 
-    ok = band_gates(ds_with([9e-6, 6.0e-6, 6.3e-6, 6.48e-6]))
-    bad = band_gates(ds_with([6.0e-6, 6.0e-6, 6.3e-6, 6.72e-6]))
-    gone = band_gates(ds_with([6.0e-6, 6.0e-6, np.nan, 6.1e-6]))
+    def spread(gates):  # the spread gates; the value gates (against b g H) are checked below
+        return [g for g in gates if "spread" in g.name]
+
+    ok = spread(band_gates(ds_with([9e-6, 6.0e-6, 6.3e-6, 6.48e-6])))
+    bad = spread(band_gates(ds_with([6.0e-6, 6.0e-6, 6.3e-6, 6.72e-6])))
+    gone = spread(band_gates(ds_with([6.0e-6, 6.0e-6, np.nan, 6.1e-6])))
     assert len(ok) == 2 and all(g.passed for g in ok)
     note = fracture_note(ds_with([9e-6, 6.0e-6, 6.3e-6, 6.48e-6]), "inter")
     assert "max/min - 1 = 8.0 % over H/dx = 10, 15, 20 (band > dx)" in note  # the gate's ladder
@@ -687,6 +690,40 @@ def test_band_gate():
     assert list(band_ladder(wide, "inter")[0]) == [5, 10, 15, 20]
     r, G = fracture_ladder(ds_with([6e-6] * 4), "inter", "compression")
     assert spacing_power(r, G) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_band_gate_checks_the_value_against_the_closed_form():
+    """Gate 5 also reads each case's energy against its closed form b g(ε_L) H
+    (studies.crack_band.band_value_gate, one gate per case): the closed form itself passes, 50 %
+    above it fails (|G/G_c − 1| r/3 = 1.7 at r = 10), and so does a NaN."""
+    import xarray as xr
+
+    from studies.crack_band import microcantilever_band_closed_form
+    from studies.microcantilever.derive import band_width
+    from studies.microcantilever.gates import band_gates
+
+    res = np.array([5, 10, 15, 20])
+    attrs = {"param_H": 5e-6, "param_band": 0.0}
+
+    def ds_with(scale):
+        G = np.full((1, 2, 2, 4), np.nan)
+        dims = ("solver", "case", "rule", "resolution")
+        ds = xr.Dataset({"fracture_energy": (dims, G), "status": (dims, np.full(G.shape, "ok"))},
+                        coords={"solver": ["csph"], "case": ["inter", "intra"],
+                                "rule": ["compression", "regularised"], "resolution": res},
+                        attrs=attrs)
+        for k, case in enumerate(("inter", "intra")):
+            ds.fracture_energy[0, k, 1] = scale * microcantilever_band_closed_form(
+                attrs, case, band_width(ds))
+        return ds
+
+    def value(gates):
+        return [g for g in gates if "closed form" in g.name]
+
+    assert len(value(band_gates(ds_with(1.0)))) == 2
+    assert all(g.passed for g in value(band_gates(ds_with(1.0))))
+    assert not any(g.passed for g in value(band_gates(ds_with(1.5))))
+    assert not any(g.passed for g in value(band_gates(ds_with(np.nan))))
 
 
 def test_deletion_summary_counts_the_deleted_elements_by_region():
