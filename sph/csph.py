@@ -318,7 +318,9 @@ class CSPH(ParticleBody):
         else:
             e = strain_energy(F, V, b.prm, b.mat_id, history=b.history)
         if b.K_hg is not None:
-            e += 0.5 * float(np.sum(self.x * (b.K_hg @ self.x)))
+            from .hourglass import hourglass_energy
+
+            e += hourglass_energy(self.disc, b.K_hg, self.x)
         return e
 
     def dissipated(self) -> dict:
@@ -361,8 +363,6 @@ class CSPH(ParticleBody):
         (:func:`sph.hourglass.hourglass_strain`)."""
         from .hourglass import hourglass_operator, hourglass_strain
 
-        if self.disc.n_ghost:
-            return {}
         if not hasattr(self, "_hg_op"):
             self._hg_op = hourglass_operator(self.disc)
         return dict(hourglass_strain=hourglass_strain(self.disc, self.x, *self._hg_op))

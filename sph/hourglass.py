@@ -10,6 +10,13 @@ with c_ab = w_ab / |X_ab|², w_ab = V_b W_ab / Σ_b V_b W_ab (W: the kernel, or 
 1 − r²/r_e² for its gradient). δ vanishes for every linear field (the
 patch test is kept) and is objective; Π_hg is a quadratic form of each coordinate column, so its
 force −K_s x is exact, constant-stiffness and momentum conserving.
+
+With symmetry planes (:mod:`sph.mirror`) the pairs are the full body's: a neighbour may be a
+ghost (index ≥ N, at sign ⊙ x_src + offset), so δ acts on the members' positions (the particles,
+then the ghosts), K_s is (N + n_g)², each row a weighted by its share w_a V_a, and the force on the
+real DOFs is the fold −T_kᵀ K_s x_ext,k of each coordinate column k (T_k: x_ext,k = T_k x_k +
+offset_k, the ghost entries sign_k): the quarter's share of the full body's force, as for the
+stored energy (:func:`folded_rows`, :func:`folded_hessian`).
 """
 from __future__ import annotations
 
@@ -23,22 +30,26 @@ from .kernels import JIT, kernel_code
 
 def hourglass_operator(disc) -> tuple[sp.csr_matrix, np.ndarray]:
     """The linear map x ↦ δ, δ_ab = (x_b − x_a) − F_a (X_b − X_a) for every CSR pair (a, b), as a
-    sparse (nnz × N) matrix D acting on each coordinate column of x, and the pair weights
+    sparse (nnz × M) matrix D acting on each coordinate column of the members' positions x
+    (M = N + n_ghost: :meth:`~sph.total_lagrangian.Discretisation.extend`), and the pair weights
     c_ab = w_ab / |X_ab|², w_ab = V_b W_ab / Σ_b V_b W_ab (so Σ_b c_ab |δ_ab|² is a mean squared
     non-linear strain). δ vanishes for every linear field (patch test kept) and transforms as a
     vector under rigid motions."""
     from .kernels import w as kernel_w
 
     N, d = disc.n, disc.dim
+    M = N + disc.n_ghost  # the members: the particles, then the ghosts of symmetry planes
+    X = disc.extend(disc.X)  # a ghost's reference position is its source's, mirrored
+    Vm = disc.V[disc.member_src]  # and its (full-body) volume its source's
     a_of = np.repeat(np.arange(N), np.diff(disc.indptr))
     b_of = disc.indices.astype(np.int64)
-    Xab = disc.X[b_of] - disc.X[a_of]
+    Xab = X[b_of] - X[a_of]
     r = np.linalg.norm(Xab, axis=1)
     if disc.kernel == "wls":  # HPM's weight (004 eq. 6), r_e = disc.h
-        Wab = np.maximum(1.0 - (r / disc.h) ** 2, 0.0) * disc.V[b_of]
+        Wab = np.maximum(1.0 - (r / disc.h) ** 2, 0.0) * Vm[b_of]
     else:
         kind = kernel_code(disc.kernel)
-        Wab = np.array([kernel_w(float(q), disc.h, kind, d) for q in r]) * disc.V[b_of]
+        Wab = np.array([kernel_w(float(q), disc.h, kind, d) for q in r]) * Vm[b_of]
     wsum = np.bincount(a_of, weights=Wab, minlength=N)
     ws = wsum[a_of]
     c = np.divide(Wab, ws * r * r, out=np.zeros_like(Wab), where=ws > 0)  # V = 0 all round: no say
@@ -58,12 +69,14 @@ def hourglass_operator(disc) -> tuple[sp.csr_matrix, np.ndarray]:
     np.add.at(gsum, a_of, disc.G)
     rows.append(np.arange(nnz)); cols.append(a_of); vals.append(np.einsum("ij,ij->i", gsum[a_of], Xab))
     D = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(nnz, N))
+                      shape=(nnz, M))
     return D, c
 
 
 def hourglass_stiffness(disc, alpha: float, mu: float) -> sp.csr_matrix:
-    """K_s (N × N) of the hourglass energy Π_hg = ½ α μ Σ_a V_a Σ_b c_ab |δ_ab|² = ½ Σ_k x_kᵀ K_s x_k
+    """K_s (M × M, M = N + n_ghost) of the hourglass energy
+    Π_hg = ½ α μ Σ_a V_a Σ_b c_ab |δ_ab|² = ½ Σ_k x_kᵀ K_s x_k over the members' positions x
+    (V_a the share w_a V_a with symmetry planes, :attr:`~sph.total_lagrangian.Discretisation.V_energy`)
     (a quadratic form of each coordinate column, so its force −K_s x is exact and constant-
     stiffness; Π_hg is invariant under rigid motions, so momentum and angular momentum stay
     conserved). ``alpha`` dimensionless (0 switches it off), ``mu`` the shear modulus, Pa: one
@@ -71,10 +84,61 @@ def hourglass_stiffness(disc, alpha: float, mu: float) -> sp.csr_matrix:
     D, c = hourglass_operator(disc)
     a_of = np.repeat(np.arange(disc.n), np.diff(disc.indptr))
     mu = np.asarray(mu, dtype=np.float64)
-    wts = alpha * (mu[a_of] if mu.ndim else mu) * disc.V[a_of] * c
+    wts = alpha * (mu[a_of] if mu.ndim else mu) * disc.V_energy[a_of] * c
     K = (D.T @ sp.diags(wts) @ D).tocsr()
     K.sum_duplicates()
     return K
+
+
+def _fold_signs(disc) -> np.ndarray:
+    """(M, d) the factor of each member's coordinate k on its source's: 1 for the particles,
+    the ghost's sign (:mod:`sph.mirror`) for the ghosts."""
+    ones = np.ones((disc.n, disc.dim))
+    return ones if not disc.n_ghost else np.concatenate([ones, disc.ghost_sign])
+
+
+def folded_rows(disc, K: sp.csr_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows R_k = T_kᵀ K (N × M) of the force −R_k x_ext,k on the real DOFs of coordinate k,
+    as one CSR pattern (indptr (N+1,), indices into the members (nnz,), data (nnz, d): column k the
+    values of R_k). A ghost's row of K is added to its source's row times the ghost's sign on
+    axis k; without ghosts R_k = K for every k."""
+    C = K.tocoo()
+    src = disc.member_src
+    rows = src[C.row]
+    vals = C.data[:, None] * _fold_signs(disc)[C.row]
+    order = np.lexsort((C.col, rows))
+    rows, cols, vals = rows[order], C.col[order].astype(np.int64), vals[order]
+    new = np.ones(rows.size, bool)
+    new[1:] = (rows[1:] != rows[:-1]) | (cols[1:] != cols[:-1])
+    start = np.flatnonzero(new)
+    data = np.add.reduceat(vals, start, axis=0) if rows.size else vals
+    indptr = np.zeros(disc.n + 1, np.int64)
+    np.add.at(indptr, rows[start] + 1, 1)
+    return np.cumsum(indptr), np.ascontiguousarray(cols[start]), np.ascontiguousarray(data)
+
+
+def folded_hessian(disc, K: sp.csr_matrix) -> sp.csr_matrix:
+    """∂²Π_hg/∂x∂x on the real DOFs, (N d × N d): Σ_k T_kᵀ K T_k on the DOFs of coordinate k
+    (kron(K, I) without ghosts)."""
+    N, d = disc.n, disc.dim
+    if not disc.n_ghost:
+        return sp.kron(K, sp.identity(d), format="csr")
+    M = K.shape[0]
+    sg = _fold_signs(disc)
+    out = None
+    for k in range(d):
+        T = sp.csr_matrix((sg[:, k], (np.arange(M), disc.member_src)), shape=(M, N))
+        E = sp.csr_matrix(([1.0], ([k], [k])), shape=(d, d))
+        Kk = sp.kron((T.T @ K @ T).tocsr(), E, format="csr")
+        out = Kk if out is None else out + Kk
+    return out.tocsr()
+
+
+def hourglass_energy(disc, K: sp.csr_matrix, x: np.ndarray) -> float:
+    """Π_hg = ½ Σ_k x_ext,kᵀ K x_ext,k at positions x (N, d) of the real particles (the ghosts
+    mirrored from them), J (J/m in 2-D)."""
+    xe = disc.extend(np.ascontiguousarray(x, dtype=np.float64))
+    return 0.5 * float(np.sum(xe * (K @ xe)))
 
 
 def hourglass_strain(disc, x: np.ndarray, D=None, c=None) -> float:
@@ -83,8 +147,9 @@ def hourglass_strain(disc, x: np.ndarray, D=None, c=None) -> float:
     if D is None:
         D, c = hourglass_operator(disc)
     a_of = np.repeat(np.arange(disc.n), np.diff(disc.indptr))
-    delta = D @ x
-    return float(np.sqrt(np.sum(disc.V[a_of] * c * np.sum(delta * delta, axis=1)) / disc.V.sum()))
+    delta = D @ disc.extend(x)
+    V = disc.V_energy  # the shares of the full body with symmetry planes
+    return float(np.sqrt(np.sum(V[a_of] * c * np.sum(delta * delta, axis=1)) / V.sum()))
 
 
 # ================================================================================================

@@ -265,7 +265,7 @@ class Body:
 
     def __init__(self, disc: Discretisation, table, mat_id=None, history=None,
                  hourglass: float = 0.0):
-        from .hourglass import hourglass_stiffness
+        from .hourglass import folded_rows, hourglass_stiffness
 
         self.disc = disc
         self.table = MaterialTable.of(table)
@@ -275,16 +275,16 @@ class Body:
         self.hourglass = float(hourglass)
         if not (self.hourglass >= 0 and math.isfinite(self.hourglass)):
             raise ValueError(f"hourglass: {hourglass} is not allowed; the coefficient must be >= 0")
+        # K_hg over the members (the ghosts of symmetry planes included), its rows folded onto
+        # the real DOFs per coordinate (sph.hourglass.folded_rows) for the force
         self.K_hg = (hourglass_stiffness(disc, self.hourglass, self.table.mu)
                      if self.hourglass > 0 else None)
+        self.hg_rows = folded_rows(disc, self.K_hg) if self.K_hg is not None else None
         self.prm = self.table.params()
         d = disc.dim
         self.history = (self.table.initial_history(self.mat_id) if history is None
                         else np.ascontiguousarray(history, dtype=np.float64))
         self.history_trial = self.history.copy()
-        if disc.n_ghost and self.hourglass > 0:
-            raise ValueError("hourglass: not modelled with symmetry planes (mirror images); "
-                             "allowed there: 0")
         self.VP = np.zeros((N + disc.n_ghost, d, d))
         self.F = np.zeros((N, 3, 3))
         self.status = np.zeros(N, np.int64)
@@ -308,14 +308,25 @@ class Body:
         if dsc.w is not None:  # the full body's force times the share (sph.mirror)
             f *= dsc.w[:, None]
         if self.K_hg is not None:
-            f -= self.K_hg @ x
+            f -= self.hourglass_force(x)
         return (f, A) if tangent else f
+
+    def hourglass_force(self, x) -> np.ndarray:
+        """R_k x_ext,k for each coordinate k (:func:`sph.hourglass.folded_rows`), (N, d): minus
+        the hourglass control's force at positions x (N, d)."""
+        indptr, indices, data = self.hg_rows
+        xe = self.disc.extend(np.ascontiguousarray(x, dtype=np.float64))
+        N, d = self.disc.n, self.disc.dim
+        return np.stack([sp.csr_matrix((data[:, k], indices, indptr), shape=(N, len(xe)))
+                         @ xe[:, k] for k in range(d)], axis=1)
 
     def tangent(self, A) -> sp.csr_matrix:
         """∂²(Π + Π_hg)/∂x∂x, (N d × N d)."""
         K = tangent_matrix(self.disc, A)
         if self.K_hg is not None:
-            K = (K + sp.kron(self.K_hg, sp.identity(self.disc.dim), format="csr")).tocsr()
+            from .hourglass import folded_hessian
+
+            K = (K + folded_hessian(self.disc, self.K_hg)).tocsr()
         return K
 
     def deformation_gradients(self, x):
@@ -500,7 +511,8 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
     """``n_steps`` velocity-Verlet steps from the synchronised state (x, v, acc):
     kick–drift; F → P (shared material routine) → V P; force → acceleration → kick.
     ``h_a`` holds the committed history on entry and on exit (``h_b`` is scratch). The hourglass
-    stiffness K_s (CSR arrays, empty when off) adds −K_s x to the force. ``imp`` (N, d), or
+    stiffness adds −R_k x_k to the force (CSR rows of :func:`sph.hourglass.folded_rows`, data
+    (nnz, d), indices into the positions with the ghosts; empty when off). ``imp`` (N, d), or
     (0, d) to skip: adds on every fixed DOF the impulse of the force acting on it,
     Σ_steps ½ (f_n + f_n+1) dt (:func:`_impulse_row`). ``dcols`` (n_mat,): the damage column
     of each material's history (:func:`workbench.materials.failure.damage_columns`, −1: cannot
@@ -571,7 +583,7 @@ def _advance(n_steps, x, v, acc, m, f_ext, fixed, v_fix, dt, damping, indptr, in
             if hg_on:
                 for i in range(d):
                     for q in range(hg_indptr[a], hg_indptr[a + 1]):
-                        acc[a, i] -= hg_data[q] * x[hg_indices[q], i]
+                        acc[a, i] -= hg_data[q, i] * xs[hg_indices[q], i]
             if track:
                 _impulse_row(a, acc, fixed, o0, o1, o2, dt, imp)
             ma = 1.0 / m[a]
@@ -697,9 +709,8 @@ def advance(body: Body, x, v, acc, f_ext, fixed, v_fix, dt: float, damping: floa
     import numba
 
     dsc = body.disc
-    K = body.K_hg
-    hg = ((K.indptr.astype(np.int64), K.indices.astype(np.int64), K.data)
-          if K is not None else (np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0)))
+    hg = (body.hg_rows if body.hg_rows is not None
+          else (np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros((0, x.shape[1]))))
     nt = numba.get_num_threads()
     if dsc.n < SERIAL_BELOW:
         numba.set_num_threads(1)
