@@ -46,8 +46,8 @@ SUSPECTS = {
 """Suspect → (scene changes, solver options by method): ``soft_contact`` the penalty k = 0.05 E_s
 (10 GPa, the mortar's own stiffness; the windowed impact force is converged in k from 0.25 E_s
 on, ``notes.md``); ``no_viscosity`` classic SPH without its Monaghan viscosity (csph has none;
-csph's hourglass control fails to build with the mirror images of the symmetry planes,
-``sph.hourglass`` indexes past the body: not tried); ``release_unscaled`` the release strain held
+its hourglass control, which now builds with the symmetry planes' mirror images, was not tried as
+a suspect); ``release_unscaled`` the release strain held
 at the paper's 5 mm value (17 000 µ at every spacing); ``slow_impact`` a tenth of B's speed (the
 wave's stress ρ c v a tenth, below f_t: what cracks then is bending, not the wave; run ten times
 as long and compared at the same mid-span displacement); ``consistent`` csph with its
