@@ -9,12 +9,19 @@ Ladders: odd numbers of spacings across L, so that the crack's line Y = 0 lies h
 two lattice rows (a PreCrack on a row belongs to one side and breaks the mirror symmetry of mode I:
 on a row sph kinks by −17, −15, −8.6° at 20, 40, 60, csph by 0).
 
+The kink angle θ is the grown crack's mean direction: from the pre-crack's tip (a, 0) to the tip
+CrackTip finds when the Threshold stops the run (``kink_angle``). CrackTip's own angle, the path's
+direction near the tip (``local_angle``), follows the lattice's directions (0, ±45, ±63.4, ±90°)
+as the path zigzags between them and does not converge in mode II (−64, −85, −84° at 41, 61, 81).
+
 Gates, mode I, per method and spacing: |θ| ≤ 0.01°, an *exact* gate — the loading, the lattice
 and the crack are mirror-symmetric about Y = 0 and so is every method's update, so θ is 0 up to
 round-off; the defect it separates is the smallest kink a lattice path shows, arctan(Δx/grow),
 one spacing off the line over the grown length. No observed order: the error is round-off at
-every spacing. Mode II (not in the default run; measured, see docs/fracture.md): |θ − θ_ES| ≤ 3°
-at the finest spacing and the observed order of |θ − θ_ES| over the ladder ≥ 0.5.
+every spacing. Mode II (``--set mode=2``; its own ladder): |θ − θ_ES| ≤ 3° at the finest spacing
+and the observed order of |θ − θ_ES| over the ladder ≥ 1. Measured (2 cores, rate 0.025 m/s):
+csph −53.7, −68.6, −71.6° at 41, 61, 81 (1.7, 7, 13 s; order 4.2, the path's lattice steps make
+it erratic); sph grows no crack in mode II before t_end (docs/fracture.md).
 """
 from __future__ import annotations
 
@@ -32,13 +39,25 @@ SCENE = CrackPathPlate
 SOLVERS = ("csph", "sph")
 RESOLUTIONS = {"csph": [21, 41, 61], "sph": [21, 41, 61]}
 QUICK_RESOLUTIONS = {"csph": [21, 31, 41], "sph": [21, 31, 41]}
+MODE_II_RESOLUTIONS = {"csph": [41, 61, 81], "sph": [21, 41, 61]}
+"""Mode II's ladder (``--set mode=2``; its quick ladder the same): csph's path needs about 40
+spacings across L before it leaves the lattice's 45° diagonal (−45° at 21)."""
+
+
+def default_resolutions(scene, quick: bool) -> dict:
+    """The ladders for ``scene``: mode I's (full or quick), or mode II's."""
+    if scene.mode == 2:
+        return MODE_II_RESOLUTIONS
+    return QUICK_RESOLUTIONS if quick else RESOLUTIONS
 OPTIONS = {"sph": {"stress": "hyperelastic"}}
 """Classic SPH needs its hyperelastic stress path for the brittle law."""
 EXACT = 0.01
 """Mode I: |θ| allowed, degrees — round-off of a mirror-symmetric run (module docstring)."""
 MODE_II_TOLERANCE = 3.0
 """Mode II: |θ − θ_ES| allowed at the finest spacing, degrees (the brief's closed-form bound)."""
-MIN_ORDER = 0.5
+MIN_ORDER = 1.0
+"""Mode II's bound on the observed order of |θ − θ_ES|: the crack's tip is resolved to about a
+spacing over a fixed grown length, an O(Δx/grow) error in its mean direction."""
 ERROR_LABEL = "|kink angle - Erdogan & Sih's| [deg]"
 N_GATES = {False: 6, True: 6}
 
@@ -58,8 +77,15 @@ def run(scene: CrackPathPlate | None = None, solvers=None, resolutions=None, qui
     ref = scene.reference()["angle"]
     length = ds["tip_length"].fillna(-1.0)
     grown = np.isfinite(ds["t_threshold"])  # the stop rule fired: the crack grew `grow`
-    angle = xr.apply_ufunc(_last_finite, ds["tip_angle"], input_core_dims=[["time"]]).where(grown)
-    ds["kink_angle"] = angle.assign_attrs(units="deg", long_name="kink angle when the crack has grown `grow`")
+    last = {c: xr.apply_ufunc(_last_finite, ds["tip_path"].isel(tip_coordinate=i),
+                              input_core_dims=[["tip_point"]]).where(grown)
+            for i, c in enumerate("xy")}  # the tip at the run's last record (the stop)
+    last["angle"] = xr.apply_ufunc(_last_finite, ds["tip_angle"], input_core_dims=[["time"]]).where(grown)
+    angle = np.degrees(np.arctan2(last["y"], last["x"] - scene.a))
+    ds["kink_angle"] = angle.assign_attrs(
+        units="deg", long_name="mean direction of the grown crack (pre-crack tip to CrackTip's tip)")
+    ds["local_angle"] = last["angle"].assign_attrs(
+        units="deg", long_name="CrackTip's kink angle (the path's direction near the tip)")
     ds["kink_angle_reference"] = xr.DataArray(ref, attrs=dict(
         units="deg", long_name="maximum hoop stress (Erdogan & Sih 1963)"))
     ds["error"] = abs(angle - ref).assign_attrs(units="deg", long_name=ERROR_LABEL)
@@ -70,8 +96,8 @@ def run(scene: CrackPathPlate | None = None, solvers=None, resolutions=None, qui
 
 
 def _last_finite(a: np.ndarray) -> np.ndarray:
-    """The last finite value along the last axis (NaN where none): the angle at the run's last
-    record (the time axis is NaN-padded past a run's stop)."""
+    """The last finite value along the last axis (NaN where none): the value at the run's last
+    record or the path's last point (both axes are NaN-padded)."""
     ok = np.isfinite(a)
     idx = np.where(ok.any(-1), a.shape[-1] - 1 - np.argmax(ok[..., ::-1], axis=-1), 0)
     last = np.take_along_axis(a, idx[..., None], axis=-1)[..., 0]
@@ -84,6 +110,7 @@ class _Ladders:
     NAME = NAME
     RESOLUTIONS = RESOLUTIONS
     QUICK_RESOLUTIONS = QUICK_RESOLUTIONS
+    default_resolutions = staticmethod(default_resolutions)
 
 
 def gates(ds: xr.Dataset) -> list:
