@@ -38,7 +38,7 @@ NAME = "crack_path"
 SCENE = CrackPathPlate
 SOLVERS = ("csph", "sph")
 RESOLUTIONS = {"csph": [21, 41, 61], "sph": [21, 41, 61]}
-QUICK_RESOLUTIONS = {"csph": [21, 31, 41], "sph": [21, 31, 41]}
+QUICK_RESOLUTIONS = {"csph": [15, 21, 31], "sph": [15, 21, 31]}
 MODE_II_RESOLUTIONS = {"csph": [41, 61, 81], "sph": [21, 41, 61]}
 """Mode II's ladder (``--set mode=2``; its quick ladder the same): csph's path needs about 40
 spacings across L before it leaves the lattice's 45° diagonal (−45° at 21)."""

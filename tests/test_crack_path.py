@@ -36,7 +36,7 @@ def test_bad_parameters_name_themselves(kw, word):
 
 
 def test_crack_path_quick_gates():
-    """`workbench run crack_path --quick` (mode I, csph and sph at 21, 31, 41 spacings): the crack
+    """`workbench run crack_path --quick` (mode I, csph and sph at 15, 21, 31 spacings): the crack
     grows straight ahead (θ = 0 to round-off) at every spacing, each gate passes, names its
     reference and fails a regression (an exact gate: a third of the smallest lattice kink), and a
     run that grew no crack (NaN) fails its gate; the crack starts after several periods T₁."""
