@@ -21,7 +21,8 @@ one spacing off the line over the grown length. No observed order: the error is 
 every spacing. Mode II (``--set mode=2``; its own ladder): |θ − θ_ES| ≤ 3° at the finest spacing
 and the observed order of |θ − θ_ES| over the ladder ≥ 1. Measured (2 cores, rate 0.025 m/s):
 csph −53.7, −68.6, −71.6° at 41, 61, 81 (1.7, 7, 13 s; order 4.2, the path's lattice steps make
-it erratic); sph grows no crack in mode II before t_end (docs/fracture.md).
+it erratic: the path runs −90° then −45°, and its mean meets −70.5° as an average of two lattice
+directions — weak evidence, docs/fracture.md); sph grows no crack in mode II before t_end.
 """
 from __future__ import annotations
 
