@@ -52,3 +52,15 @@ def test_crack_path_quick_gates():
     ds["error"][0, -1] = np.nan
     assert not study.gates(ds)[len(study.QUICK_RESOLUTIONS["csph"]) - 1].passed
     assert ds["kink_angle"].attrs["units"] == "deg"
+
+
+def test_mode_i_gate_fails_a_broken_symmetry():
+    """A real defect, not a scaled one: at 20 spacings the crack's line is a lattice row, which
+    belongs to the upper side, so the mirror symmetry is broken and sph's mode-I crack kinks
+    (−14°: one spacing off the line over the grown 20 mm): its exact gate fails."""
+    from studies import crack_path as study
+
+    ds = study.run(solvers=["sph"], resolutions={"sph": [20]})
+    (gate,) = study.gates(ds)
+    assert float(ds["error"].sel(solver="sph", resolution=20)) > 1.0
+    assert not gate.passed, gate.line()
