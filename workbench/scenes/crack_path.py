@@ -8,7 +8,8 @@ after a smooth start, by grips (explicit dynamics):
 * mode I: u_y = ±δ(t) on Y = ±L/2 (u_x free): symmetric about the crack's line, K_II = 0; the
   crack grows straight ahead, kink angle θ = 0.
 * mode II: u_x = ±δ(t) on Y = ±L/2, u_y = 0 there: antisymmetric, the upper face slides towards
-  the tip, K_I ≈ 0 and K_II > 0 (the upper crack face moves +x, Williams' mode-II field); the
+  the tip, K_II > 0 (the upper crack face moves +x, Williams' mode-II field) and K_I ≈ 0 (by the
+  antisymmetry; not measured here); the
   maximum-hoop-stress criterion (Erdogan & Sih 1963), K_I sin θ + K_II (3 cos θ − 1) = 0 with
   K_I = 0, gives cos θ = 1/3, θ = −arccos(1/3) = −70.53°
   (:func:`kink_angle`), clockwise from the crack's direction.
@@ -104,7 +105,9 @@ class CrackPathPlate(Scene):
     def period(self) -> float:
         """T₁, s: the first period of the gripped plate in its loading's mode — the uncracked
         layer of height L between the grips, in thickness stretch (mode I: 2L/c_p) or thickness
-        shear (mode II: 2L/c_s), the one-dimensional standing half wave between the grips (an upper bound for the cracked plate's, which is softer)."""
+        shear (mode II: 2L/c_s), the one-dimensional standing half wave between the grips — a
+        lower bound: the cracked plate is softer and its period longer, so the onset measured in
+        T₁ overstates how slow the loading is by that factor."""
         return 2 * self.L / (self.c_p if self.mode == 1 else self.c_s)
 
     def reference(self) -> dict:
