@@ -16,6 +16,7 @@ STUDIES = {
     "microcantilever_mode": "studies.microcantilever.mode",
     "rc_beam": "studies.rc_beam",
     "centre_crack": "studies.centre_crack",
+    "crack_path": "studies.crack_path",
 }
 # The studies that `workbench verify` runs, in order.
 HEADLINE = ("ss_curve", "cantilever", "plate", "stability", "rc_beam", "microcantilever")
