@@ -196,3 +196,40 @@ def vtk_grid(mesh):
     kind = pv.CellType.QUAD if mesh.dim() == 2 else pv.CellType.HEXAHEDRON
     cells = np.column_stack([np.full(len(corners), corners.shape[1]), corners]).ravel()
     return pv.UnstructuredGrid(cells, np.full(len(corners), kind, dtype=np.uint8), pts)
+
+
+# ------------------------------------------------------------------------------------------------
+# Field output
+# ------------------------------------------------------------------------------------------------
+
+def mesh_series(folder, name: str, disc):
+    """``add(t, u, v=None)`` writing the mesh (vertex ``displacement`` and, when given,
+    ``velocity``) as a frame of the ParaView series ``name`` (.pvd + .vtu) in ``folder``."""
+    from workbench.fields import FieldSeries
+
+    series = FieldSeries(folder, name)
+    grid = vtk_grid(disc.basis.mesh)
+    nodal = disc.basis.nodal_dofs  # (d, n_vertices): the vertex DOFs of each component
+
+    def add(t, u, v=None):
+        data = dict(displacement=u[nodal].T)
+        if v is not None:
+            data["velocity"] = v[nodal].T
+        series.add(t, grid=grid, **data)
+
+    return add
+
+
+def mesh_snapshots(folder, name: str, disc, n_steps: int, frames: int):
+    """``snapshot(step, t, u, v)`` for :func:`fem_reference.dynamic.newmark`: about ``frames``
+    frames of :func:`mesh_series` over ``n_steps`` steps, the last step always."""
+    from workbench.fields import check_frames
+
+    every = max(1, -(-int(n_steps) // check_frames(frames)))
+    add = mesh_series(folder, name, disc)
+
+    def snapshot(step, t, u, v):
+        if step % every == 0 or step == n_steps:
+            add(t, u, v)
+
+    return snapshot

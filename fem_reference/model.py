@@ -100,7 +100,8 @@ from workbench.scenes.shapes import Point
 
 from .assembly import Discretisation
 from .boundary import Constraints, Loads
-from .mesh import grid_lines, tensor_mesh
+from .drivers import _error_status
+from .mesh import grid_lines, mesh_series, mesh_snapshots, tensor_mesh
 from .static import Problem
 
 TOL = 1e-6
@@ -595,51 +596,8 @@ def observe(fm: FemModel, state, lam: float | None = None, need_force: bool = Tr
 
 
 # ------------------------------------------------------------------------------------------------
-# Field output
-# ------------------------------------------------------------------------------------------------
-
-def mesh_series(folder, name: str, disc):
-    """``add(t, u, v=None)`` writing the mesh (vertex ``displacement`` and, when given,
-    ``velocity``) as a frame of the ParaView series ``name`` (.pvd + .vtu) in ``folder``."""
-    from workbench.fields import FieldSeries
-
-    from .mesh import vtk_grid
-
-    series = FieldSeries(folder, name)
-    grid = vtk_grid(disc.basis.mesh)
-    nodal = disc.basis.nodal_dofs  # (d, n_vertices): the vertex DOFs of each component
-
-    def add(t, u, v=None):
-        data = dict(displacement=u[nodal].T)
-        if v is not None:
-            data["velocity"] = v[nodal].T
-        series.add(t, grid=grid, **data)
-
-    return add
-
-
-def mesh_snapshots(folder, name: str, disc, n_steps: int, frames: int):
-    """``snapshot(step, t, u, v)`` for :func:`fem_reference.dynamic.newmark`: about ``frames``
-    frames of :func:`mesh_series` over ``n_steps`` steps, the last step always."""
-    from workbench.fields import check_frames
-
-    every = max(1, -(-int(n_steps) // check_frames(frames)))
-    add = mesh_series(folder, name, disc)
-
-    def snapshot(step, t, u, v):
-        if step % every == 0 or step == n_steps:
-            add(t, u, v)
-
-    return snapshot
-
-
-# ------------------------------------------------------------------------------------------------
 # Drives
 # ------------------------------------------------------------------------------------------------
-
-def _error_status(err: Exception) -> str:
-    return f"error: {type(err).__name__}: {err}".replace("\n", " ")
-
 
 def _static(fm: FemModel, t0: float, options: dict, series) -> dict:
     from .observe import plastic_strain

@@ -261,6 +261,19 @@ def observed_order(h, err) -> float:
     return float(slope)
 
 
+def error_rows(ds, error: str = "error") -> list[dict]:
+    """A study's ``errors``: the finite error ``ds[error]`` of each (solver, resolution) run with
+    its wall time, the rows of the accuracy-against-cost figure."""
+    rows = []
+    for s in ds.solver.values:
+        for r in ds.resolution.values:
+            e = float(ds[error].sel(solver=s, resolution=r))
+            if np.isfinite(e):
+                rows.append(dict(solver=str(s), resolution=int(r), error=e,
+                                 wall_time=float(ds["wall_time"].sel(solver=s, resolution=r))))
+    return rows
+
+
 def check_resolutions(resolutions) -> list[int]:
     """The resolutions as integers >= 1 (:class:`~workbench.scenes.ParameterError` otherwise, one
     line); an empty list is refused."""

@@ -33,7 +33,7 @@ import xarray as xr
 
 from workbench.scenes.crack_path import CrackPathPlate
 
-from .common import Gate, ladders, observed_order
+from .common import Gate, error_rows, ladders, observed_order
 
 NAME = "crack_path"
 SCENE = CrackPathPlate
@@ -147,14 +147,7 @@ def gates(ds: xr.Dataset) -> list:
 
 def errors(ds: xr.Dataset) -> list[dict]:
     """The error against the wall time of each run (accuracy against cost)."""
-    rows = []
-    for s in ds.solver.values:
-        for r in ds.resolution.values:
-            e = float(ds["error"].sel(solver=s, resolution=r))
-            if np.isfinite(e):
-                rows.append(dict(solver=str(s), resolution=int(r), error=e,
-                                 wall_time=float(ds["wall_time"].sel(solver=s, resolution=r))))
-    return rows
+    return error_rows(ds)
 
 
 def plot(ds: xr.Dataset, outdir) -> list:
