@@ -14,13 +14,13 @@ import time
 
 import numpy as np
 
+from workbench.results import error_status as _error_status
+
 from .assembly import Discretisation
 from .mesh import quarter_ring
 from .static import Problem, load_path
 
 
-def _error_status(err: Exception) -> str:
-    return f"error: {type(err).__name__}: {err}".replace("\n", " ")
 
 
 # ------------------------------------------------------------------------------------------------

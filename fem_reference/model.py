@@ -94,13 +94,13 @@ import numpy as np
 
 from workbench.materials import HIST_EPS_P, MaterialTable
 from workbench.oscillation import measure_period, period_amplitude  # noqa: F401 (re-exported)
+from workbench.results import error_status as _error_status
 from workbench.scenes import model as M
 from workbench.scenes.params import SceneError
 from workbench.scenes.shapes import Point
 
 from .assembly import Discretisation
 from .boundary import Constraints, Loads
-from .drivers import _error_status
 from .mesh import grid_lines, mesh_series, mesh_snapshots, tensor_mesh
 from .static import Problem
 

@@ -29,6 +29,12 @@ STOPPED = "stopped: the caller's criterion was met"
 failure): both static solvers (``fem_reference.static.load_path``, ``sph.static.solve_path``)."""
 
 
+def error_status(err: BaseException) -> str:
+    """The status of a run that raised ``err``: ``error: <type>: <message>`` on one line (a failed
+    run is a result, not a crash)."""
+    return f"error: {type(err).__name__}: {err}".replace("\n", " ")
+
+
 def path_ok(status: str) -> bool:
     """Whether a static path value's status is a success: ``ok`` (possibly qualified, ``ok (…)``)
     or :data:`STOPPED`."""
