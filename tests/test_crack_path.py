@@ -49,6 +49,16 @@ def test_crack_path_quick_gates():
         assert g.passed and g.reference, g.line()
         assert not g.regressed(3.0).passed, g.line()
     assert float(ds["onset_periods"].min()) > 5.0
+    # the onset load: the grip reaction at the first record with a grown crack, against LEFM's
+    # (the elastic FEM's compliance, G = G_c); a strength-based onset with l_ch = E'G_c/f_t² =
+    # 0.44 a lies below LEFM's (the size effect: LEFM is the large-size limit, from above)
+    for s in ds.solver.values:
+        for r in ds.resolution.values:
+            run = ds.sel(solver=s, resolution=r)
+            first = int(np.argmax(run["tip_length"].fillna(0).values > 0))
+            assert float(run["onset_load"]) == float(run["grip"][first])
+            assert float(run["onset_ratio"]) == float(run["onset_load"] / run["onset_load_lefm"])
+            assert 0 < float(run["onset_ratio"]) < 1, (s, r, float(run["onset_ratio"]))
     ds["error"][0, -1] = np.nan
     assert not study.gates(ds)[len(study.QUICK_RESOLUTIONS["csph"]) - 1].passed
     assert ds["kink_angle"].attrs["units"] == "deg"

@@ -30,7 +30,7 @@ import workbench.scenes.model as m
 
 from ..materials import Material
 from .params import ParameterError, Scene, param
-from .shapes import Box, Plane
+from .shapes import Box, HalfSpace, Intersection, Plane
 
 
 def kink_angle(K_I: float, K_II: float) -> float:
@@ -148,6 +148,32 @@ class CrackPathPlate(Scene):
                              stop=(m.Threshold("tip_length", above=self.grow),)),
             observables=(m.CrackTip("tip", "crack"),
                          m.Reaction("grip", "top", axis)))
+
+    def critical_energy_release(self) -> float:
+        """G at the crack's onset by LEFM, J/m²: G_c in mode I; in mode II the maximum-hoop-stress
+        criterion's K_IIc = (√3/2) K_Ic, so G_IIc = K_IIc²/E' = ¾ G_c."""
+        return self.G_c if self.mode == 1 else 0.75 * self.G_c
+
+    def elastic_half(self, a: float, grip: float = 1e-6) -> m.Model:
+        """The elastic plate above the crack's line (0 ≤ Y ≤ L/2), crack length ``a``, with the top
+        grip moved by ``grip`` (m) in the loading's direction: the LEFM reference of the onset
+        (``studies.crack_path.lefm_onset``) by the FEM, which cuts no elements. Mode I is symmetric
+        about Y = 0: the ligament X ≥ a on a roller in y, the crack face free. Mode II is
+        antisymmetric (u_x odd, u_y even in Y): the ligament held in x, the crack face free, the
+        grip's u_y = 0. One static step; ``grip`` small (geometrically linear)."""
+        L, axis = self.L, (1 if self.mode == 1 else 0)
+        ligament = Intersection((Plane(1, 0.0), HalfSpace((a, 0.0), (-1.0, 0.0))))
+        constraints = [m.Roller("ligament", axis),
+                       m.Prescribed("top", axis, displacement=m.Proportional(grip))]
+        if self.mode == 2:
+            constraints.append(m.Roller("top", 1))
+        return m.Model(
+            dim=2, plane="strain", length=L, name=f"{self.name}_half",
+            regions=(m.Region("plate", Box((0.0, 0.0), (L, L / 2)),
+                              Material.svk(E=self.E, nu=self.nu, rho=self.rho)),),
+            sets=(m.Set("top", Plane(1, L / 2)), m.Set("ligament", ligament)),
+            constraints=tuple(constraints), drive=m.Static(path=(1.0,)),
+            observables=(m.Reaction("grip", "top", axis),))
 
     def summarise(self, out: dict) -> dict:
         return {}
