@@ -80,9 +80,9 @@ TOL_PERIOD_CONSISTENT = 7.5e-4
 # Its expected error is the discretisation's alone: the bulk's +0.04 % (free–free beam above), the
 # clamped corners' term and the reference's own error. The corners' term, from the cantilever's
 # clamp at the same spacing (studies/cantilever.py: csph's compliance +0.05 … +0.10 % against the
-# bulk's 2 × 0.04 %, so the corners −0.03 … +0.02 % of the compliance), is at most 0.015 % of the
-# period (T ∝ √compliance: half of it; the plate's longer span, L/H = 10 against 8, dilutes it
-# further). The reference's own error: the quick run's limit (FEM at 2, 4, 8 across H) lies
+# bulk's 2 × 0.0415 %, so the corners −0.033 … +0.017 % of the compliance), is at most 0.015 % of
+# the period (T ∝ √compliance: half of it, 0.0165 %, and the corner's share of the strain energy
+# scales as H/L: 8/10 of it on the plate's longer span, 0.013 %). The reference's own error: the quick run's limit (FEM at 2, 4, 8 across H) lies
 # 0.005 % below the full run's (4, 8, 16), whose own is smaller still. Together 0.06 %: 6e-4.
 # (The dynamic period was gated against the same limit with TOL_PERIOD_CONSISTENT: +0.016 % (quick)
 # and +0.011 % (full), whose tripled errors passed. The modal error, recorded full run +0.025 %
