@@ -38,7 +38,9 @@ SUSPECTS = {
     "no_viscosity": ({}, dict(sph=dict(alpha=0.0, beta=0.0))),
     "release_unscaled": (dict(scale_release=False), {}),
     "slow_impact": (dict(velocity=0.14), {}),
-    "shear_kept": (dict(phi_min=0.999), {}),
+    "as_printed": (dict(shear_retention=0.0), {}),
+    "shear_kept": (dict(phi_min=0.999, shear_retention=0.0), {}),
+    "retention_0.2": (dict(shear_retention=0.2), {}),
     "no_rebar": (dict(rebar=False), {}),
     "consistent": (dict(dt_reference="spectrum", dt_factor=0.9),
                    dict(csph=dict(integration="consistent"))),
@@ -52,8 +54,12 @@ at the paper's 5 mm value (17 000 µ at every spacing); ``slow_impact`` a tenth 
 wave's stress ρ c v a tenth, below f_t: what cracks then is bending, not the wave; run ten times
 as long and compared at the same mid-span displacement); ``consistent`` csph with its
 integration-consistent correction instead of nodal integration (no zero-energy modes; at 0.9 of
-its critical step, ``dt_reference='spectrum'``); ``shear_kept`` the shear floor φ_min of eq. 6 at
-0.999 (a crack keeps its shear stiffness: eq. 7's shear rates release nothing); ``no_rebar`` a
+its critical step, ``dt_reference='spectrum'``); ``as_printed`` 003's eq. 7 as printed (shear
+rates φ̃_iφ̃_j falling with the opening; the baseline before the shear retention, the mortar's
+default since issue 35's cure); ``shear_kept`` that law with the shear floor φ_min of eq. 6 at
+0.999 (a crack keeps its shear stiffness: eq. 7's shear rates release nothing);
+``retention_0.2`` the constant shear retention at 0.2 (the default 0.05: the range of fixed
+smeared-crack models is 0.05–0.2); ``no_rebar`` a
 plain mortar beam (does the mortar alone localise, without a perfectly bonded bar beside it?)."""
 
 
@@ -192,14 +198,19 @@ def released_on_path(mat, path) -> float:
 def tension_shear_reference(mat, g: float) -> float:
     """The energy (J/m³) eq. 6–8 release on :func:`tension_shear_path`, in closed form: the normal
     part (λ + 2μ)/E · g_F (uniaxial strain: σ = φ²(λ + 2μ)e, φ²Ee on the release line of Fig. 8),
-    plus the shear part ∫ 2μ E_xy² (−dα), the shear factor α = max(φ, φ_min) of eq. 7 falling as
-    the crack opens (quadrature of the closed-form φ(e), :func:`reduction_factor`'s formula)."""
+    plus, with eq. 7 as printed (``shear_retention`` 0), the shear part ∫ 2μ E_xy² (−dα), the
+    shear factor α = max(φ, φ_min) of eq. 7 falling as the crack opens (quadrature of the
+    closed-form φ(e), :func:`reduction_factor`'s formula); with a constant shear retention the
+    shear rate does not change once the crack is set (at ε_cr, before the shear starts at 2ε_cr),
+    so there is no shear part."""
     from scipy.integrate import quad
 
     E, nu, ft, e0, pmin = mat.E, mat.nu, mat.f_t, mat.eps_release, mat.phi_min
     lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
     ecr = ft / E
     gF = 0.5 * ft * e0
+    if mat.shear_retention > 0:
+        return (lam + 2 * mu) / E * gF
 
     def dphi(e):  # dφ/de of φ = √(ε_cr(ε_0 − e)/(e(ε_0 − ε_cr))) on (ε_cr, ε_0)
         phi = math.sqrt(ecr * (e0 - e) / (e * (e0 - ecr)))
@@ -249,8 +260,12 @@ def main(argv=None) -> None:  # pragma: no cover - the measurement behind notes.
                   f"(c_p t {r['wave_travel'] * 1e3:6.1f} mm) bottom {r['first_bottom'] * 1e6:6.1f} us "
                   f"(H/c_p {r['bottom_arrival'] * 1e6:.1f} us) w {r['midspan'] * 1e3:.3f} mm "
                   f"wall {r['wall']:.0f} s {r['status']}")
+            from .derive import history_maximum
+
+            wmax, tmax, cut = history_maximum(r["run"]["time"], r["w"])
             print(f"   released {r['released_energy']:.3g} J, per crack area {r['per_area']:.3g} G_F, "
-                  f"fully released share {r['share_full']:.3g}")
+                  f"fully released share {r['share_full']:.3g}, largest w {wmax * 1e3:.3f} mm at "
+                  f"{tmax * 1e3:.2f} ms{' (truncated: a lower bound)' if cut else ''}")
             k = [int(i) for i in np.searchsorted(r["time"], np.linspace(0.1, 1, 10) * a.t_end)
                  if i < len(r["time"])]
             print("   t us / w mm / damaged / softened / released:", " ".join(
