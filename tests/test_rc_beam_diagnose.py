@@ -50,6 +50,15 @@ def test_damage_measures_count_volumes():
                                    cracking=19 / 20), rel=1e-14)
 
 
+def test_energy_per_softened_area_counts_bands_two_spacings_wide():
+    """Half of 0.003 m³ of mortar softened at Δx = 12.5 mm is 0.0015/(2 · 0.0125) = 0.06 m² of
+    band-equivalent crack; 8.211 J released there is 2 G_F (G_F = 68.425 N/m) per unit area, what
+    a clean band of two columns releases; nothing softened: no area (NaN)."""
+    assert dg.energy_per_softened_area(2 * 68.425 * 0.06, 0.003, 0.5, 0.0125, 68.425) == \
+        pytest.approx(2.0, rel=1e-14)
+    assert math.isnan(dg.energy_per_softened_area(1.0, 0.003, 0.0, 0.0125, 68.425))
+
+
 def test_a_short_run_records_the_damage_of_its_state():
     """B at 20 mm over 0.1 ms (about 1 s): the fractions recorded at the last record are those of
     the run's final material history, computed apart; damage starts under the plate before the
