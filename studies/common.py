@@ -154,9 +154,11 @@ class Gate:
     ``error`` (:meth:`at_most`: an error the method has; three times it must fail), ``exact``
     (:meth:`at_most` with ``defect``: the method is exact, the observed value is round-off and the
     tolerance separates it from ``defect``, the smallest error of a method known to be wrong: a
-    third of that must fail), ``order`` (:meth:`at_least`) and ``outcome`` (:meth:`expect`: the
-    other outcome must fail). A gate whose run is missing or gave NaN fails (:meth:`missing`);
-    it never disappears."""
+    third of that must fail), ``order`` (:meth:`at_least`), ``outcome`` (:meth:`expect`: the
+    other outcome must fail) and ``criterion`` (:meth:`criterion`: an acceptance criterion with no
+    error model — a share, a ratio of two energies of the run — whose regression is the criterion
+    violated). A gate whose run is missing or gave NaN fails (:meth:`missing`); it never
+    disappears."""
 
     name: str
     observed: float
@@ -199,6 +201,20 @@ class Gate:
                    shown=f"{observed} (expected {expected})", reference=reference, kind="outcome")
 
     @classmethod
+    def criterion(cls, name: str, observed: float, bound: float, reason: str,
+                  reference: str = "") -> "Gate":
+        """An acceptance criterion: ``observed`` at most ``bound`` (NaN fails), where the bound is
+        a requirement (the issue's, the physics') and not the error a method should have, and the
+        observed value has no error model (a count of failures outside a region, which may be
+        zero; a ratio of two energies of the run). Three times such a value is no regression of
+        anything; its regression is the criterion violated (:meth:`regressed`)."""
+        observed = float(observed)
+        ok = bool(np.isfinite(observed) and observed <= bound)
+        return cls(name, observed, float(bound), reason, ok,
+                   shown=f"{observed:.4g} (criterion: at most {bound:.4g})", reference=reference,
+                   kind="criterion")
+
+    @classmethod
     def missing(cls, name: str, why: str, tolerance: float, reason: str,
                 reference: str = "") -> "Gate":
         """A gate whose run is missing, failed or gave no value: it fails (observed NaN) and says
@@ -210,7 +226,8 @@ class Gate:
         """The same gate fed a regression: an ``error`` gate ``factor`` times its observed error;
         an ``exact`` gate its ``defect`` over ``factor``; an ``outcome`` gate the other outcome;
         an ``order`` gate the order less ``log(factor)/log(2)`` (``factor`` times the error at the
-        finest of two rungs a factor 2 apart)."""
+        finest of two rungs a factor 2 apart); a ``criterion`` the smallest value that violates it
+        (the next float above its bound: no error model says what ``factor`` would mean)."""
         import dataclasses
         import math as _m
 
@@ -218,6 +235,11 @@ class Gate:
             value = factor * self.observed
         elif self.kind == "exact":
             value = self.defect / factor
+        elif self.kind == "criterion":
+            value = float(np.nextafter(self.tolerance, np.inf))
+            return dataclasses.replace(
+                self, observed=value, passed=bool(value <= self.tolerance),
+                shown=f"{value:.4g} (criterion: at most {self.tolerance:.4g})")
         elif self.kind == "outcome":
             return dataclasses.replace(self, observed=1.0 - self.observed, passed=not self.passed)
         else:  # order

@@ -63,16 +63,42 @@ GATED = ("csph", "hpm", "hpm_vc")
 # second order. Their expected period error at H/Δx = 10: the bulk O((Δx/H)²) error, measured on a
 # free–free beam without the clamp's corners at the same spacing (+0.04 %,
 # tests/test_consistency.py: an estimate independent of this plate), the clamped corners (cut out
-# of the integration) add a term below that (modal +0.025 % here), and the dynamic run's finite
-# amplitude shifts the period by ~0.015 % against the modal reference: 0.06 %. (Was 1e-3 =
-# (Δx/H)²/8, against a measured +0.0305 %: a tripled error, 0.09 %, passed; now it fails.) The
-# nodal variants miss it by far: csph_quad by 0.19 %, csph_bl by 2.7 %, hpm by 1.8 %.
-TOL_PERIOD_CONSISTENT = 6e-4
+# of the integration) at most 0.015 % and the reference's own error 0.005 % (TOL_PERIOD_MODAL
+# says why), and the dynamic run's finite amplitude, which shifts the period by ~0.015 % against
+# the modal reference: 0.075 %. (Was 6e-4, a sum without the corners' and the reference's terms;
+# before that 1e-3 = (Δx/H)²/8, against a measured +0.0305 %: a tripled 0.09 % passed.) hpm_vc's
+# dynamic period is gated with it: −0.046 %, its modal −0.03 % and the shift adding (its bulk on
+# the free–free beam is csph's, +0.043 % at 10; its corners' term is larger than csph's and of
+# the opposite sign, as its cantilever's +0.03 % against the bulk's +0.087 % of compliance says
+# too); a tripled 0.14 % fails. csph's dynamic period is not gated at 10: its two terms of
+# opposite sign (the discretisation's +0.025 %, the finite amplitude's −0.014 %) nearly cancel,
+# so csph's period at 10 is gated like with like, its modal period against the FEM's modal limit
+# (TOL_PERIOD_MODAL). The nodal variants miss it by far: csph_quad by 0.19 %, csph_bl by 2.7 %,
+# hpm by 1.8 %.
+TOL_PERIOD_CONSISTENT = 7.5e-4
+# csph's modal (linearised) period at H/Δx = 10 against the FEM's modal limit: the same quantity,
+# the continuum's linear period, by two independent discretisations, so no finite-amplitude term.
+# Its expected error is the discretisation's alone: the bulk's +0.04 % (free–free beam above), the
+# clamped corners' term and the reference's own error. The corners' term, from the cantilever's
+# clamp at the same spacing (studies/cantilever.py: csph's compliance +0.05 … +0.10 % against the
+# bulk's 2 × 0.0415 %, so the corners −0.033 … +0.017 % of the compliance), is at most 0.015 % of
+# the period (T ∝ √compliance: half of it, 0.0165 %; the corner's share of the strain energy
+# scales as H/L, so 8/10 of it on the plate's longer span, 0.013 %). The reference's own error:
+# the quick run's limit (FEM at 2, 4, 8 across H) lies 0.005 % below the full run's (4, 8, 16),
+# whose own is smaller still. Together 0.06 %: 6e-4. (The dynamic period was gated against the
+# same limit with TOL_PERIOD_CONSISTENT: +0.016 % (quick) and +0.011 % (full), whose tripled
+# errors passed. The modal error, recorded full run +0.025 % and quick +0.030 %: tripled 0.075 %
+# and 0.090 %, both fail.)
+TOL_PERIOD_MODAL = 6e-4
+MODAL_AT = 10
+"""The resolution of csph's modal period gate (computed in the quick run too)."""
 # Their amplitude against the FEM's dynamic amplitude: A = V/ω, the period's error (the finite
 # amplitude is in both runs and cancels: 0.045 %) and the peak's sampling (parabolic refinement of
-# records ~T/200 apart: (π/200)²/2 ≈ 1e-4), plus the reference's own error as above. (Was 5 % in
-# the study and 0.3 % in tests/test_csph_plate.py; measured +0.066 % against the quick run's FEM
-# at 4 across H, whose own error is 0.12 %.)
+# records ~T/200 apart: (π/200)²/2 ≈ 1e-4), plus the reference's own error as TOL_AMPLITUDE's.
+# (Was 5 % in the study and 0.3 % in tests/test_csph_plate.py; measured +0.066 % against the
+# quick run's FEM at 4 across H, whose own error is 0.12 %.) Open (issue 42): the reference's own error counts its
+# mesh but not its Newmark step, which moves its amplitude as much — at 8 across H −0.077 % from
+# the study's 100 to 200 steps per period (tests/test_gates.py, FULL_PLATE_SLIPS).
 TOL_AMPLITUDE_CONSISTENT = 6e-4
 CONSISTENT = ("csph", "hpm_vc")
 # csph at H/Δx = 40 (full ladder), its dynamic period against the FEM's modal limit. The expected
@@ -100,12 +126,12 @@ TOL_PERIOD_FINE = 3e-4
 MIN_ORDER = 1.5
 MODAL_RUNGS = 3
 """csph's modal period is computed on its ladder where that has this many rungs (the order gate's
-minimum): the full ladder; the quick one (two rungs, no order gate) runs none."""
+minimum): the full ladder; the quick one (two rungs, no order gate) at MODAL_AT alone."""
 N_GATES = {False: 12, True: 7}
-"""Gates of the default run (full, ``--quick``): the FEM against thin-plate theory; period,
-amplitude and energy drift at H/Δx = 10 of csph, hpm and hpm_vc (csph and hpm in the quick
-ladder); csph at H/Δx = 40 and its observed order (full). ``verify`` fails where fewer were
-evaluated."""
+"""Gates of the default run (full, ``--quick``): the FEM against thin-plate theory; period (csph's
+the modal one), amplitude and energy drift at H/Δx = 10 of csph, hpm and hpm_vc (csph and hpm in
+the quick ladder); csph at H/Δx = 40 and its observed order (full). ``verify`` fails where fewer
+were evaluated."""
 # Method options of this study: classic SPH on the cell lattice (Gray et al.'s arrangement; the
 # free surfaces half a spacing outside the outermost particles), the others on the node lattice.
 OPTIONS = {"sph": {"lattice": "cell"}}  # classic SPH is the baseline: it is expected to fail, not gated
@@ -146,9 +172,10 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
     tasks = [Task.make(s, scene, r, **({"dynamic": r == dyn} if s == "fem" else OPTIONS.get(s, {})),
                        **field_options(s, r, fields, field_runs))
              for s, lad in ladders.items() for r in lad]
-    # csph's modal periods, on a ladder long enough for the order gate (its reference: the modal limit)
-    modal_tasks = [Task.make("csph", scene, r, drive=Modal(1))
-                   for r in ladders.get("csph", ()) if len(ladders["csph"]) >= MODAL_RUNGS]
+    # csph's modal periods: at MODAL_AT (its period gate) and, on a ladder long enough for the
+    # order gate, on every rung (their reference: the FEM's modal limit)
+    modal_tasks = [Task.make("csph", scene, r, drive=Modal(1)) for r in ladders.get("csph", ())
+                   if r == MODAL_AT or len(ladders["csph"]) >= MODAL_RUNGS]
     done = run_tasks(tasks + modal_tasks, scheduler, NAME)
     outs = dict(zip(((t.solver, t.resolution) for t in tasks), done[:len(tasks)]))
     modal_outs = {t.resolution: o for t, o in zip(modal_tasks, done[len(tasks):])}
@@ -202,7 +229,8 @@ def run(scene: Plate | None = None, solvers=None, resolutions=None, quick: bool 
         modal[i, j] = o.get("period", np.nan)
         modal_status[i, j] = str(o["status"])
     ds["modal_period"] = (("solver", "resolution"), modal, {"units": "s", "long_name":
-                          "linearised (modal) period of the discrete plate (csph, full ladder)"})
+                          "linearised (modal) period of the discrete plate (csph: at H/dx = 10; "
+                          "full: its ladder)"})
     ds["modal_status"] = (("solver", "resolution"), modal_status.astype(str), {"units": "-"})
     ds["period_nondim"] = (ds.period * scene.c0 / scene.L).assign_attrs(units="-", long_name="T c0 / L")
     ds["amplitude_nondim"] = (ds.amplitude / scene.L).assign_attrs(units="-", long_name="A / L")
@@ -317,6 +345,20 @@ def modal_order_gate(ds: xr.Dataset, ref: float) -> Gate:
     return Gate.at_least(name, order, MIN_ORDER, why, FEM_REFERENCE)
 
 
+def modal_period_gate(ds: xr.Dataset, ref: float) -> Gate:
+    """csph's modal period at H/Δx = MODAL_AT against the FEM's modal limit ``ref``
+    (:data:`TOL_PERIOD_MODAL`: like with like, no finite-amplitude term); a modal run that is
+    missing or gave NaN fails."""
+    name = f"plate csph at H/dx = {MODAL_AT}: modal period vs FEM modal period"
+    why = ("second order: the bulk error at H/dx = 10 (0.04 %, free-free beam) + the corners' "
+           "0.015 % (the cantilever's clamp) + the reference's 0.005 %")
+    if "modal_period" not in ds:
+        return Gate.missing(name, "no modal periods in the dataset", TOL_PERIOD_MODAL, why,
+                            FEM_REFERENCE)
+    v = float(ds.modal_period.sel(solver="csph", resolution=MODAL_AT))
+    return Gate.at_most(name, abs(v - ref) / ref, TOL_PERIOD_MODAL, why, FEM_REFERENCE)
+
+
 def gates(ds: xr.Dataset) -> list[Gate]:
     """The plate's gates (:data:`N_GATES`): every gate of a run the study meant to make is
     evaluated; a run that is missing or gave NaN fails its gate (never removes it)."""
@@ -342,12 +384,16 @@ def gates(ds: xr.Dataset) -> list[Gate]:
             continue  # not asked for (a solver or ladder of the user's): not a gate of this run
         if not planned(ds.status.sel(solver=s, resolution=10)):
             continue
-        v = float(ds.period.sel(solver=s, resolution=10))
-        tol, why = ((TOL_PERIOD_CONSISTENT, "second order: the bulk error at H/dx = 10 (0.04 %, "
-                     "free-free beam) + the finite amplitude's 0.015 %")
-                    if s in CONSISTENT else (TOL_PERIOD, "issues 4/5: 3 % (004's model: 2.7 %)"))
-        g.append(Gate.at_most(f"plate {s} at H/dx = 10: period vs FEM modal period",
-                              abs(v - ref) / ref, tol, why, FEM_REFERENCE))
+        if s == "csph":
+            g.append(modal_period_gate(ds, ref))
+        else:
+            v = float(ds.period.sel(solver=s, resolution=10))
+            tol, why = ((TOL_PERIOD_CONSISTENT, "second order: the bulk error at H/dx = 10 (0.04 "
+                         "%, free-free beam) + the corners' 0.015 % + the finite amplitude's "
+                         "0.015 % + the reference's 0.005 %") if s in CONSISTENT
+                        else (TOL_PERIOD, "issues 4/5: 3 % (004's model: 2.7 %)"))
+            g.append(Gate.at_most(f"plate {s} at H/dx = 10: period vs FEM modal period",
+                                  abs(v - ref) / ref, tol, why, FEM_REFERENCE))
         a = float(ds.amplitude.sel(solver=s, resolution=10))
         own = _fem_dynamic_error(ds)
         tol, why = ((TOL_AMPLITUDE_CONSISTENT, "A = V/omega: the period's error 0.045 % + the "

@@ -49,6 +49,16 @@ def test_crack_path_quick_gates():
         assert g.passed and g.reference, g.line()
         assert not g.regressed(3.0).passed, g.line()
     assert float(ds["onset_periods"].min()) > 5.0
+    # the onset load: the grip reaction at the first record with a grown crack, against LEFM's
+    # (the elastic FEM's compliance, G = G_c); a strength-based onset with l_ch = E'G_c/f_t² =
+    # 0.44 a lies below LEFM's (the size effect: LEFM is the large-size limit, from above)
+    for s in ds.solver.values:
+        for r in ds.resolution.values:
+            run = ds.sel(solver=s, resolution=r)
+            first = int(np.argmax(run["tip_length"].fillna(0).values > 0))
+            assert float(run["onset_load"]) == float(run["grip"][first])
+            assert float(run["onset_ratio"]) == float(run["onset_load"] / run["onset_load_lefm"])
+            assert 0 < float(run["onset_ratio"]) < 1, (s, r, float(run["onset_ratio"]))
     ds["error"][0, -1] = np.nan
     assert not study.gates(ds)[len(study.QUICK_RESOLUTIONS["csph"]) - 1].passed
     assert ds["kink_angle"].attrs["units"] == "deg"
@@ -64,3 +74,20 @@ def test_mode_i_gate_fails_a_broken_symmetry():
     (gate,) = study.gates(ds)
     assert float(ds["error"].sel(solver="sph", resolution=20)) > 1.0
     assert not gate.passed, gate.line()
+
+
+def test_classic_sph_grows_a_mode_ii_crack():
+    """Classic SPH in mode II at 15 spacings: the crack grows from the pre-crack's tip on the side
+    Erdogan & Sih's criterion gives (θ < 0, the lower half) until the Threshold stops the run, and
+    no particle of the gripped bands fails. With brittle grips (``tab=0``, the scene before) the
+    uncorrected kernel's prescribed rows failed first — 18 of the 25 failed particles on Y = ±L/2 —
+    and no crack grew by t_end."""
+    from sph import driver
+
+    scene = CrackPathPlate(mode=2)
+    out = driver.solve("sph", scene, 15, stress="hyperelastic")
+    assert out["status"] == "ok" and np.isfinite(out["t_threshold"]), out["status"]
+    failed, X = out["failed_particles"], out["X"]
+    assert failed.any() and not (np.abs(X[failed, 1]) > scene.L / 2 - scene.tab).any()
+    tip_y = np.asarray(out["tip_y"])
+    assert np.nanmin(tip_y) < -scene.L / 15  # grown more than a spacing below the crack's line

@@ -25,42 +25,20 @@ def quick_gates(quick_verify):
     return gates
 
 
-KNOWN_SLIPS = {
-    "plate csph at H/dx = 10: period vs FEM modal period":
-        "csph's dynamic period carries the discretisation's +0.025 % (its modal period) and the "
-        "finite amplitude's −0.014 %, of opposite sign; it reads +0.016 % against the quick run's "
-        "reference (the FEM from 2, 4, 8 elements across H) and +0.011 % against the full one's "
-        "(FULL_PLATE_SLIPS): a tolerance catching three times that would lie below the bulk term "
-        "alone (0.04 %), the error the method should have",
-    **{f"microcantilever {case} compression H/dx=5: failed particles outside the {where}":
-       "none failed outside the low eps_L's material: a count of zero, which no factor moves; the "
-       "issue's 80 % is the criterion, not an error model"
-       for case, where in (("inter", "grain boundaries"), ("intra", "grains"))},
-    **{f"microcantilever {case} compression H/dx=5: kinetic / elastic energy before the first "
-       "failure": "0.27 % against the issue's 1 % for quasi-static loading, a physical criterion "
-       "(the ramp's start-up transient 4/(omega_1 t)^2 alone is 0.4 %), not an error model"
-       for case in ("inter", "intra")},
-}
-"""Gates of the quick run whose tripled error still passes: the tolerance is the error the method
-should have and the run's error lies far below it (a cancellation no derivation promises); each
-is named in issue 42's note. The set must be exactly this (a gate that joins it, or leaves it,
-fails the test)."""
-
-
 @pytest.mark.parametrize("study", studies.HEADLINE)
 def test_every_gate_fails_a_threefold_regression(quick_gates, study):
     """Each gate passes on the quick run, fails when fed its regression (Gate.regressed: three
-    times the error it recorded), and names its reference."""
+    times the error it recorded; an acceptance criterion, which has no error model, violated),
+    and names its reference. No exceptions."""
     slipped = {}
     for g in quick_gates[study]:
         assert g.passed, g.line()
-        assert g.kind in ("error", "exact", "order", "outcome"), g
+        assert g.kind in ("error", "exact", "order", "outcome", "criterion"), g
         assert g.reference, f"{g.name}: no word on why its reference is independent"
         r = g.regressed(3.0)
         if r.passed:
             slipped[g.name] = f"{g.kind} {r.observed:.3g} within {g.tolerance:.3g}"
-    known = {k: v for k, v in KNOWN_SLIPS.items() if k.startswith(study)}
-    assert set(slipped) == set(known), slipped
+    assert not slipped, slipped
 
 
 @pytest.mark.parametrize("study", studies.HEADLINE)
@@ -72,7 +50,8 @@ def test_quick_run_evaluates_the_gates_it_declares(quick_gates, study):
 def test_regression_of_each_kind():
     """Gate.regressed on each kind: an error gate at a third of its tolerance passes and fails
     tripled; an exact gate fails at a third of its defect; an outcome gate fails on the other
-    outcome; an order gate of 2 against 1.5 fails at 2 − log2(3)."""
+    outcome; an order gate of 2 against 1.5 fails at 2 − log2(3); a criterion fails just above
+    its bound."""
     e = Gate.at_most("e", 0.4, 1.0, "r", "ref")
     assert e.passed and not e.regressed().passed
     assert Gate.at_most("e", 0.3, 1.0, "r", "ref").regressed().passed  # a loose tolerance slips
@@ -83,6 +62,10 @@ def test_regression_of_each_kind():
     assert o.passed and not o.regressed().passed
     p = Gate.at_least("p", 2.0, 1.5, "r", "ref")
     assert p.passed and not p.regressed().passed
+    c = Gate.criterion("c", 0.0, 0.2, "r", "ref")  # a count of zero: three times it is zero
+    assert c.passed and c.kind == "criterion" and not c.regressed().passed
+    assert Gate.criterion("c", 0.2, 0.2, "r", "ref").passed  # the bound itself is met
+    assert not Gate.criterion("c", float("nan"), 0.2, "r", "ref").passed
 
 
 def test_missing_gate_fails_and_says_why():
@@ -154,9 +137,15 @@ def test_plate_nan_at_the_finest_fails_its_gate():
     assert len(g) == plate.N_GATES[False]
     assert [x.name for x in g if not x.passed] == [
         "plate csph: observed order of the (modal) period error"]
+    _, ds = plate_dataset(nan_modal_at=10)  # csph's period gate at 10 is the modal one
+    g = plate.gates(ds)
+    assert len(g) == plate.N_GATES[False]
+    assert [x.name for x in g if not x.passed] == [
+        "plate csph at H/dx = 10: modal period vs FEM modal period",
+        "plate csph: observed order of the (modal) period error"]
     g = plate.gates(ok.drop_vars("modal_period"))  # a dataset without them: fails, says why
     assert [x.shown for x in g if not x.passed] == [
-        "not evaluated: no modal periods in the dataset"]
+        "not evaluated: no modal periods in the dataset"] * 2
 
 
 # The recorded full plate run (`workbench run plate`, 2 shared cores): the FEM's modal periods at
@@ -170,17 +159,21 @@ CSPH_MODAL = (0.25635094, 0.25538569, 0.25529733, 0.25530503)
 AT_10 = {"csph": (0.2553492868, 0.0229723848, 8.75e-7), "hpm": (0.2597860426, 0.0233195916, 8.45e-7),
          "hpm_vc": (0.2552035162, 0.0229624265, 5.17e-7)}
 FULL_PLATE_SLIPS = {
-    "plate csph at H/dx = 10: period vs FEM modal period":
-        "its dynamic period carries two terms of opposite sign: the discretisation's +0.025 % (its "
-        "modal period) and the finite amplitude's −0.014 %; they leave +0.011 %, and a tolerance "
-        "at three times that would sit below the bulk term alone (0.04 %), the error the method "
-        "should have",
     "plate csph at H/dx = 10: amplitude vs FEM dynamic amplitude":
         "the tolerance carries the period's error into A = V/omega and adds the FEM's own; the "
         "amplitudes agree far closer (+0.009 %) than that model says, and no derivation of their "
-        "own error is at hand",
+        "own error is at hand. The FEM reference is itself not converged in its time step: its "
+        "dynamic amplitude at 8 across H is 0.0229704 m at the study's 100 Newmark steps per "
+        "period and 0.0229527 m at 200 (-0.077 %); at 4 across H 0.0229572, 0.0229387, "
+        "0.0229481 m at 100, 200, 400 (not monotone: the higher modes' phase errors move the "
+        "tip's peak); its mesh ladder at 100 steps (4, 8, 16 across H: 0.0229572, 0.0229704, "
+        "0.0229751 m, order 1.5) puts its mesh error at 8 at 0.033 %, less than the step's. "
+        "Against the 200-step FEM csph reads +0.086 %: the +0.009 % is partly the "
+        "reference's step error, which the tolerance's own-error term (the mesh's period error, "
+        "0.047 %) does not hold; the fix is a reference converged in its step (more steps and a "
+        "step-halving error estimate), which needs a new full run",
     "plate hpm_vc at H/dx = 10: amplitude vs FEM dynamic amplitude":
-        "as csph's: +0.035 % against a model of 0.11 %",
+        "as csph's: +0.035 % against a model of 0.11 % (+0.042 % against the 200-step FEM)",
 }
 """Gates of the recorded full plate run whose tripled error still passes, each with why (the set
 must be exactly this)."""
@@ -239,6 +232,13 @@ def test_plate_gates_on_the_recorded_full_run():
     for x in (fine, order):
         assert x.passed and not x.regressed(3.0).passed, x.line()
     assert order.observed == pytest.approx(1.91, abs=0.01)
+    # csph's period at 10 like with like (modal against the modal limit): +0.025 %, and a tripled
+    # error fails; the dynamic period against it (+0.011 %, the old gate) mixes the finite
+    # amplitude's −0.014 % in, and its tripled error passed the same derivation's tolerance
+    at10 = g["plate csph at H/dx = 10: modal period vs FEM modal period"]
+    assert at10.passed and not at10.regressed(3.0).passed, at10.line()
+    assert at10.observed == pytest.approx(CSPH_MODAL[1] / ref - 1, rel=1e-9)
+    assert 3 * abs(CSPH_DYNAMIC[1] / ref - 1) < plate.TOL_PERIOD_MODAL
     h = 1.0 / np.array([5, 10, 20, 40])
     assert observed_order(h, np.array(CSPH_DYNAMIC) - ref) < plate.MIN_ORDER  # the old gate
     # the dynamic periods' error tends to a constant: the finite amplitude's shift, which the
@@ -347,10 +347,16 @@ RECORDED = [
     pytest.param("cantilever", "TOL_CONSISTENT_FEM", 3e-4, "hpm_vc at H/dx = 10 (README)",
                  marks=pytest.mark.xfail(strict=True, reason=(
                      "cannot be tightened: the expected error at H/dx = 10 is the bulk's O(dx^2) "
-                     "term (2 x 0.04 %, the free-free beam) plus the clamp's corner term of about "
-                     "that size and of either sign; hpm_vc's +0.03 % is their near-cancellation, "
-                     "and a tolerance catching its tripled 0.09 % would lie below the bulk term "
-                     "plus the corner's (0.16 %), the error the method should have"))),
+                     "term plus the clamp's corner term; hpm_vc's bulk, measured on the free-free "
+                     "beam without corners (tests/test_consistency.py's set-up, H/dx = 5, 10, 20, "
+                     "40: period +0.208, +0.0435, +0.0100, +0.0025 % from the order-2 limit, "
+                     "order 2.2), is +0.087 % of the compliance, and its +0.03 % on the cantilever "
+                     "leaves a corner term of -0.06 %, of the bulk's size and opposite sign: a "
+                     "tolerance catching the tripled 0.09 % would lie at the bulk term alone. No "
+                     "like-with-like quantity exists in the study: its other rungs carry the same "
+                     "two terms (at 20: +0.020 % and about -0.025 % at the corner's order ~1.2, a "
+                     "cancellation again), an order gate cannot see a constant factor, and gating "
+                     "the corner term apart needs a model of its size that no derivation gives"))),
     ("cantilever", "TOL_PAPER_FEM", 3.5e-3, "csph_quad at H/dx = 10 (README)"),
     ("cantilever", "TOL_FEM_ELASTICA", 1.9e-2, "FEM at load 5 (tests/test_fem_cantilever.py)"),
     ("rc_beam", "TOL_SLOW", 3.7e-2, "slow impact, csph at 8 ms (studies/rc_beam/slow_impact.py)"),

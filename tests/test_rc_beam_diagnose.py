@@ -50,6 +50,15 @@ def test_damage_measures_count_volumes():
                                    cracking=19 / 20), rel=1e-14)
 
 
+def test_energy_per_softened_area_counts_bands_two_spacings_wide():
+    """Half of 0.003 m³ of mortar softened at Δx = 12.5 mm is 0.0015/(2 · 0.0125) = 0.06 m² of
+    band-equivalent crack; 8.211 J released there is 2 G_F (G_F = 68.425 N/m) per unit area, what
+    a clean band of two columns releases; nothing softened: no area (NaN)."""
+    assert dg.energy_per_softened_area(2 * 68.425 * 0.06, 0.003, 0.5, 0.0125, 68.425) == \
+        pytest.approx(2.0, rel=1e-14)
+    assert math.isnan(dg.energy_per_softened_area(1.0, 0.003, 0.0, 0.0125, 68.425))
+
+
 def test_a_short_run_records_the_damage_of_its_state():
     """B at 20 mm over 0.1 ms (about 1 s): the fractions recorded at the last record are those of
     the run's final material history, computed apart; damage starts under the plate before the
@@ -85,12 +94,17 @@ def test_a_crack_that_slides_releases_its_shear_energy_beyond_g_f(g):
 
     s = RCBeam()
     mat = Material.mortar(E=s.E_m, nu=s.nu_m, f_t=s.f_t, f_c=s.f_c,
-                          eps_release=s.release_strain(0.0125))
+                          eps_release=s.release_strain(0.0125), shear_retention=0.0)  # as printed
     got = dg.released_on_path(mat, dg.tension_shear_path(mat, g, n=400))
     want = dg.tension_shear_reference(mat, g)
     assert got == pytest.approx(want, rel=1e-4)
     gF = 0.5 * s.f_t * s.release_strain(0.0125)
     assert want / gF > (2.0 if g else 1.1)
+    # the beam's mortar (the default constant shear retention) releases the normal part only
+    cured = s.mortar(0.0125)
+    assert cured.shear_retention > 0
+    assert dg.released_on_path(cured, dg.tension_shear_path(cured, g, n=400)) == pytest.approx(
+        dg.tension_shear_reference(cured, g), rel=1e-4)
 
 
 def test_the_shear_floor_is_a_parameter_of_the_beam():
@@ -102,6 +116,18 @@ def test_the_shear_floor_is_a_parameter_of_the_beam():
     assert RCBeam(phi_min=0.999).mortar(0.0125).phi_min == 0.999
     with pytest.raises(ParameterError, match=r"^phi_min: .*allowed: \[0, 1\)"):
         RCBeam(phi_min=1.0)
+
+
+def test_the_shear_retention_is_a_parameter_of_the_beam():
+    """``shear_retention`` (the cure of issue 35; 0: eq. 7 as printed, the ``as_printed`` suspect)
+    reaches the mortar and its parameter row; out of [0, 1] it is refused with one line."""
+    from workbench.scenes.params import ParameterError
+
+    assert RCBeam().mortar(0.0125).shear_retention == 0.05
+    assert RCBeam(shear_retention=0.2).mortar(0.0125).params()[8] == 0.2
+    assert dg.suspect_scene(RCBeam(), "as_printed").mortar(0.0125).shear_retention == 0.0
+    with pytest.raises(ParameterError, match=r"^shear_retention: .*allowed: \[0, 1\]"):
+        RCBeam(shear_retention=1.5)
 
 
 def test_a_plain_beam_has_mortar_where_the_bars_were():

@@ -22,7 +22,9 @@ ERROR_LABEL = "energy balance error |W_ext - (K + E + W_p + W_rel)| / W_ext, max
 # external work at most in the runs measured; 1 % is the issue's bound.
 TOL_ENERGY = 0.01
 # Where it breaks (gate 3): at least 80 % of the failed particles in the boundaries (inter) or in
-# the grains (intra), the issue's bound.
+# the grains (intra), the issue's bound. An acceptance criterion (Gate.criterion), not an error
+# model: the share outside is a count of failures (zero in the runs measured), which no method
+# error scales; its regression is the criterion violated (tests/test_gates.py).
 MIN_SHARE = 0.8
 # Quasi-static (gate 4): kinetic energy below 1 % of the elastic energy before the first failure,
 # from the end of the velocity ramp (or half the time to the first failure, if later) to the first
@@ -30,7 +32,10 @@ MIN_SHARE = 0.8
 # measured alike at every resolution (intra, H/Δx = 5, 10, 20: 1.12, 1.16, 1.19 % at 0.27 µs;
 # 0.36–0.39 % at 0.47 µs): with the window "the second half of the time to the first failure"
 # alone, the intra run at H/Δx = 20, whose first failure (at the loading patch's edge, a singular
-# point) comes at 0.55 µs, read 1.13 % from 0.275 µs, inside the ramp.
+# point) comes at 0.55 µs, read 1.13 % from 0.275 µs, inside the ramp. An acceptance criterion
+# (Gate.criterion): the ratio is the loading's physics (0.27 % at H/Δx = 5), a requirement on the
+# scene's loading rate, not a discretisation error with an order; its regression is the criterion
+# violated (tests/test_gates.py).
 TOL_QUASI_STATIC = 0.01
 # Gate 1, elastic slope against the FEM (issue 11: 1 %). The slope of every consistent
 # discretisation of this scene converges at the singular order p = 2λ = 1.09 (SINGULAR_ORDER); the
@@ -180,15 +185,17 @@ def gates(ds: xr.Dataset) -> list[Gate]:
                               "and released energies (a balance law)", defect=lost))
         share = float(ds.share_boundaries.sel(**sel))
         share = share if case == "inter" else 1.0 - share
-        g.append(Gate.at_most(f"{tag}: failed particles outside the "
-                              f"{'grain boundaries' if case == 'inter' else 'grains'}",
-                              1.0 - share if np.isfinite(share) else np.nan, 1.0 - MIN_SHARE,
-                              "issue 11 gate 3: at least 80 % where the low eps_L is",
-                              "the scene's regions (where the low eps_L is), fixed before the run"))
-        g.append(Gate.at_most(f"{tag}: kinetic / elastic energy before the first failure",
-                              float(ds.kinetic_ratio.sel(**sel)), TOL_QUASI_STATIC,
-                              "issue 11 gate 4: quasi-static loading",
-                              "the run's own elastic energy (a ratio of two energies of the run)"))
+        g.append(Gate.criterion(f"{tag}: failed particles outside the "
+                                f"{'grain boundaries' if case == 'inter' else 'grains'}",
+                                1.0 - share if np.isfinite(share) else np.nan, 1.0 - MIN_SHARE,
+                                "issue 11 gate 3: at least 80 % where the low eps_L is",
+                                "the scene's regions (where the low eps_L is), fixed before the "
+                                "run"))
+        g.append(Gate.criterion(f"{tag}: kinetic / elastic energy before the first failure",
+                                float(ds.kinetic_ratio.sel(**sel)), TOL_QUASI_STATIC,
+                                "issue 11 gate 4: quasi-static loading",
+                                "the run's own elastic energy (a ratio of two energies of the "
+                                "run)"))
         sep = "separated" if float(ds.separated.sel(**sel)) == 1.0 else \
             f"not separated ({ds.status.sel(**sel).values})"
         g.append(Gate.expect(f"{tag}: complete separation, no NaN, no crash", sep, "separated",

@@ -38,8 +38,12 @@ SUSPECTS = {
     "no_viscosity": ({}, dict(sph=dict(alpha=0.0, beta=0.0))),
     "release_unscaled": (dict(scale_release=False), {}),
     "slow_impact": (dict(velocity=0.14), {}),
-    "shear_kept": (dict(phi_min=0.999), {}),
+    "as_printed": (dict(shear_retention=0.0), {}),
+    "shear_kept": (dict(phi_min=0.999, shear_retention=0.0), {}),
+    "retention_0.2": (dict(shear_retention=0.2), {}),
     "no_rebar": (dict(rebar=False), {}),
+    "slow_bend": (dict(velocity=0.14, mass=1e4), {}),
+    "slow_bend_plain": (dict(velocity=0.14, mass=1e4, rebar=False), {}),
     "consistent": (dict(dt_reference="spectrum", dt_factor=0.9),
                    dict(csph=dict(integration="consistent"))),
 }
@@ -52,9 +56,17 @@ at the paper's 5 mm value (17 000 µ at every spacing); ``slow_impact`` a tenth 
 wave's stress ρ c v a tenth, below f_t: what cracks then is bending, not the wave; run ten times
 as long and compared at the same mid-span displacement); ``consistent`` csph with its
 integration-consistent correction instead of nodal integration (no zero-energy modes; at 0.9 of
-its critical step, ``dt_reference='spectrum'``); ``shear_kept`` the shear floor φ_min of eq. 6 at
-0.999 (a crack keeps its shear stiffness: eq. 7's shear rates release nothing); ``no_rebar`` a
-plain mortar beam (does the mortar alone localise, without a perfectly bonded bar beside it?)."""
+its critical step, ``dt_reference='spectrum'``); ``as_printed`` 003's eq. 7 as printed (shear
+rates φ̃_iφ̃_j falling with the opening; the baseline before the shear retention, the mortar's
+default since issue 35's cure); ``shear_kept`` that law with the shear floor φ_min of eq. 6 at
+0.999 (a crack keeps its shear stiffness: eq. 7's shear rates release nothing);
+``retention_0.2`` the constant shear retention at 0.2 (the default 0.05: the range of fixed
+smeared-crack models is 0.05–0.2); ``no_rebar`` a
+plain mortar beam (does the mortar alone localise, without a perfectly bonded bar beside it?);
+``slow_bend`` / ``slow_bend_plain`` a slow three-point bend of the reinforced / plain beam: a
+weight a hundred times heavier at a tenth of the speed (the same 98 J; the wave's stress a
+tenth, and the weight's period on the beam ten times longer, so the beam bends nearly
+statically: run it about six times as long, 30 ms, for the same mid-span displacement)."""
 
 
 def p_wave_speed(E: float, nu: float, rho: float) -> float:
@@ -106,6 +118,21 @@ def damage_map(X: np.ndarray, D: np.ndarray, dx: float, axis: int) -> tuple:
     return ks * dx, np.array([float(np.mean(D[k == i] > 0.5)) for i in ks])
 
 
+def energy_per_softened_area(released: float, V_mortar: float, softened: float, dx: float,
+                             G_F: float) -> float:
+    """The released energy ``released`` (J) over G_F (J/m²) times the crack area the softened
+    mortar would make as bands :data:`.derive.CRACK_BAND_WIDTH` spacings wide,
+    softened · V_mortar/(2Δx) (m²): 2 where every softened particle lies in a clean band that has
+    released its G_F (as the crack-band bar), less where softened mortar has not yet released all
+    of it. Beside :func:`.derive.crack_band_energy` (the fully released volume as the area), it
+    tells an energy excess per crack (the measure above 2 here too) from a diffuse softening
+    (near or below 2 here, far above with the fully released volume). NaN without softening."""
+    from .derive import CRACK_BAND_WIDTH
+
+    A = softened * V_mortar / (CRACK_BAND_WIDTH * dx)
+    return released / (A * G_F) if A > 0 else math.nan
+
+
 def diagnose(method: str, scene: RCBeam, resolution: int, **options) -> dict:
     """One diagnostic run: ``method`` on ``scene`` (its t_end and n_out as given) at
     ``resolution`` with the study's options (:data:`.ladders.OPTIONS`) updated by ``options``.
@@ -114,7 +141,9 @@ def diagnose(method: str, scene: RCBeam, resolution: int, **options) -> dict:
     final maps (``map_x``, ``map_z``), the first damage in the bottom face's layer
     (``first_bottom``) beside the P-wave's arrival there from the top, H/c_p (``bottom_arrival``),
     the energy released per crack area over G_F (``per_area``, :func:`.derive.crack_band_energy`)
-    and the fully released particles' share of it (``share_full``), the released energy (J, full
+    and the fully released particles' share of it (``share_full``), the same per the softened
+    mortar's band area (``per_softened_area``, :func:`energy_per_softened_area`), the released
+    energy (J, full
     beam), the mid-span displacement (``midspan`` at the end, ``w`` at the records), the run's status
     and its result dict (``run``) with the mortar's mask (``mortar``)."""
     from sph.driver import model_at, solve
@@ -142,6 +171,12 @@ def diagnose(method: str, scene: RCBeam, resolution: int, **options) -> dict:
     from .derive import crack_band_energy
 
     band = crack_band_energy(scene, resolution, out)
+    from workbench.materials.mortar import fracture_energy
+
+    W = scene.copies * float(out["released_energy"][-1])
+    per_softened = energy_per_softened_area(W, scene.copies * float(ps.V[mortar].sum()),
+                                            rec["softened"][-1] if rec["softened"] else 0.0, dx,
+                                            fracture_energy(scene.f_t, eps_0, dx))
     res = {k: np.asarray(v) for k, v in rec.items()}
     t = res["time"]
     hit = np.flatnonzero(res["cracking"] > 0)
@@ -157,7 +192,8 @@ def diagnose(method: str, scene: RCBeam, resolution: int, **options) -> dict:
                w=np.asarray(out["midspan_displacement"], float), run=out,
                per_area=band["released_per_crack_area_over_GF"],
                share_full=band["released_share_full"],
-               released_energy=scene.copies * float(out["released_energy"][-1]), mortar=mortar, status=out.get("status", ""),
+               per_softened_area=per_softened,
+               released_energy=W, mortar=mortar, status=out.get("status", ""),
                wall=float(out["total_time"]))
     return res
 
@@ -192,14 +228,19 @@ def released_on_path(mat, path) -> float:
 def tension_shear_reference(mat, g: float) -> float:
     """The energy (J/m³) eq. 6–8 release on :func:`tension_shear_path`, in closed form: the normal
     part (λ + 2μ)/E · g_F (uniaxial strain: σ = φ²(λ + 2μ)e, φ²Ee on the release line of Fig. 8),
-    plus the shear part ∫ 2μ E_xy² (−dα), the shear factor α = max(φ, φ_min) of eq. 7 falling as
-    the crack opens (quadrature of the closed-form φ(e), :func:`reduction_factor`'s formula)."""
+    plus, with eq. 7 as printed (``shear_retention`` 0), the shear part ∫ 2μ E_xy² (−dα), the
+    shear factor α = max(φ, φ_min) of eq. 7 falling as the crack opens (quadrature of the
+    closed-form φ(e), :func:`reduction_factor`'s formula); with a constant shear retention the
+    shear rate does not change once the crack is set (at ε_cr, before the shear starts at 2ε_cr),
+    so there is no shear part."""
     from scipy.integrate import quad
 
     E, nu, ft, e0, pmin = mat.E, mat.nu, mat.f_t, mat.eps_release, mat.phi_min
     lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
     ecr = ft / E
     gF = 0.5 * ft * e0
+    if mat.shear_retention > 0:
+        return (lam + 2 * mu) / E * gF
 
     def dphi(e):  # dφ/de of φ = √(ε_cr(ε_0 − e)/(e(ε_0 − ε_cr))) on (ε_cr, ε_0)
         phi = math.sqrt(ecr * (e0 - e) / (e * (e0 - ecr)))
@@ -249,8 +290,13 @@ def main(argv=None) -> None:  # pragma: no cover - the measurement behind notes.
                   f"(c_p t {r['wave_travel'] * 1e3:6.1f} mm) bottom {r['first_bottom'] * 1e6:6.1f} us "
                   f"(H/c_p {r['bottom_arrival'] * 1e6:.1f} us) w {r['midspan'] * 1e3:.3f} mm "
                   f"wall {r['wall']:.0f} s {r['status']}")
+            from .derive import history_maximum
+
+            wmax, tmax, cut = history_maximum(r["run"]["time"], r["w"])
             print(f"   released {r['released_energy']:.3g} J, per crack area {r['per_area']:.3g} G_F, "
-                  f"fully released share {r['share_full']:.3g}")
+                  f"fully released share {r['share_full']:.3g}, per softened area "
+                  f"{r['per_softened_area']:.3g} G_F, largest w {wmax * 1e3:.3f} mm at "
+                  f"{tmax * 1e3:.2f} ms{' (truncated: a lower bound)' if cut else ''}")
             k = [int(i) for i in np.searchsorted(r["time"], np.linspace(0.1, 1, 10) * a.t_end)
                  if i < len(r["time"])]
             print("   t us / w mm / damaged / softened / released:", " ".join(

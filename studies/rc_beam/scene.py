@@ -169,6 +169,10 @@ class RCBeam(Scene):
     phi_min: float = param(0.05, "-", "floor of the mortar's shear reduction factors (003 eq. 6: "
                            "0.05); near 1 the crack keeps its shear stiffness", lo=0, hi=1,
                            hi_open=True)
+    shear_retention: float = param(0.05, "-", "the mortar's constant shear rate of a cracked pair "
+                                   "of axes (a fixed smeared crack: a sliding crack releases its "
+                                   "normal G_F only); 0: 003's eq. 7 as printed (rates falling "
+                                   "with the opening, floored by phi_min)", lo=0, hi=1)
     E_s: float = param(206e9, "Pa", "steel Young's modulus", lo=0, lo_open=True)
     nu_s: float = param(0.3, "-", "steel Poisson's ratio", lo=-1, hi=0.5, lo_open=True,
                         hi_open=True)
@@ -248,7 +252,7 @@ class RCBeam(Scene):
         try:
             return Material.mortar(E=self.E_m, nu=self.nu_m, f_t=self.f_t, f_c=self.f_c,
                                    eps_release=self.release_strain(dx), rho=self.rho_m,
-                                   phi_min=self.phi_min)
+                                   phi_min=self.phi_min, shear_retention=self.shear_retention)
         except ValueError as err:
             raise ParameterError(str(err)) from None
 

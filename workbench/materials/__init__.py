@@ -94,6 +94,7 @@ class Material:
     eps_release: float = 0.0  # mortar: strain of complete stress release, -
     H_c: float = 0.0          # mortar: linear hardening modulus, Pa
     phi_min: float = 0.05     # mortar: floor of the reduction factor φ
+    shear_retention: float = 0.05  # mortar: shear rate of a cracked pair (0: 003's eq. 7)
     G_c: float = 0.0          # brittle (law 5): fracture energy, J/m²
     band: float = 0.0         # brittle: crack band width, m (0: the method's, MaterialTable.with_band)
 
@@ -148,12 +149,17 @@ class Material:
     @classmethod
     def mortar(cls, E: float, nu: float, f_t: float, f_c: float, eps_release: float | None = None,
                *, G_f: float | None = None, particle_size: float | None = None,
-               H_c: float | None = None, phi_min: float = 0.05, rho: float = 2200.0) -> "Material":
+               H_c: float | None = None, phi_min: float = 0.05, shear_retention: float = 0.05,
+               rho: float = 2200.0) -> "Material":
         """Mortar of paper 003 (:mod:`workbench.materials.mortar`): tension softening by stress
         release (eq. 5–7) on the degraded orthotropic matrix (eq. 8), Mises plasticity with linear
         hardening H_c (default E/99: post-yield slope E/100 in uniaxial stress, Fig. 14). The
         release strain is ``eps_release`` or, by eq. 5, 2 G_f/(f_t · particle_size) (G_f in J/m²,
-        particle_size in m). ρ = 2200 kg/m³ by default (003 gives none).
+        particle_size in m). ρ = 2200 kg/m³ by default (003 gives none). ``shear_retention`` β
+        in [0, 1]: the constant shear rate of a pair of crack axes once one has cracked (a fixed
+        smeared crack; default 0.05, so that a crack that slides releases its normal g_F only);
+        0 gives eq. 7 as printed (rates φ̃_iφ̃_j falling with the opening, floored by ``phi_min``).
+        See the module docstring of :mod:`workbench.materials.mortar`, "Shear retention".
 
         Eq. 5 assumes a crack band one particle wide, but the particle methods crack a band of two
         lattice columns (a particle's gradient is formed from its neighbours: a jump between two
@@ -171,7 +177,7 @@ class Material:
             raise ValueError("eps_release: give either eps_release or (G_f, particle_size), not both")
         H_c = E / 99.0 if H_c is None else H_c
         return cls(law="mortar", E=E, nu=nu, rho=rho, f_t=f_t, f_c=f_c, eps_release=eps_release,
-                   H_c=H_c, phi_min=phi_min).validated()
+                   H_c=H_c, phi_min=phi_min, shear_retention=shear_retention).validated()
 
     @classmethod
     def brittle(cls, E: float, nu: float, f_t: float, G_c: float, rho: float = 7850.0,
@@ -333,7 +339,7 @@ class Material:
             d.update(c1=self.c1, c2=self.c2, lambda_mr=self.lam_mr)
         if self.law == "mortar":
             d.update(f_t=self.f_t, f_c=self.f_c, eps_release=self.eps_release, H_c=self.H_c,
-                     phi_min=self.phi_min)
+                     phi_min=self.phi_min, shear_retention=self.shear_retention)
         if self.law == "brittle":
             d.update(f_t=self.f_t, G_c=self.G_c, band=self.band)
         return d

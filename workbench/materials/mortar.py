@@ -74,6 +74,26 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   the normal terms it would leave a residual stress 0.0025 E ε (0.5 MPa at 17 000 µ, 31 % of f_t)
   and the stress could never be "completely released" as §4.1 states. A fully released direction
   (φ = 0) thus still transfers a little shear, 2μ φ_min φ_j e'_ij, as the floor intends.
+* Shear retention (the default; not 003): with ``shear_retention`` β > 0 the shear rates do not
+  follow the opening. Once an axis has cracked (D_i > 0), every shear rate of a pair it belongs to
+  is the constant β, α_ij = β if D_i > 0 or D_j > 0, else 1 (a fixed smeared crack with constant
+  shear retention, Rots 1988, Rots & Blaauwendraad 1989: β = 0.05–0.2). Why: with eq. 7's rates
+  α_ij = φ̃_iφ̃_j a crack that slides as it opens releases 2μ e'_ij²(−dα_ij) on top of its normal
+  g_F, 1.14–5.64 g_F per axis on the path of ``studies/rc_beam/diagnose.tension_shear_path``
+  (E_xy = 0 to 1 × (E_xx − 2ε_cr)); on the RC beam that is most of the released energy
+  (studies/rc_beam/notes.md). With a constant rate the shear terms are a fixed quadratic of the
+  strain once a crack is set, so a crack releases its normal g_F only ((λ + 2μ)/E g_F under
+  uniaxial strain, whatever it slides). The drop 1 → β happens in the step an axis first cracks,
+  where the frame is the principal frame of the step's trial strain (a first crack) or of its
+  block normal to the crack (a second), so e'_ij = 0 there at the trial strain and the drop
+  stores and releases (almost) nothing: the midpoint rule books 2μ(1 − β)e'_m,ij² of the step's
+  midpoint strain, second order in the step. β is the same open or closed (the stored energy stays
+  continuous at closure, as above) and φ_min no longer enters the law (it remains the kernel
+  reduction's factor of 003 §4.2(2), :mod:`sph.classic`). Default β = 0.05: the low end of the
+  fixed-crack range (a larger β locks stress across a crack whose principal directions turn,
+  Rots 1988), and 003's own shear floor φ_min, so that a fully released axis against an uncracked
+  one transfers the same shear as in 003 (2μ·0.05 e'_ij). β = 0 (``shear_retention=0``) is eq. 7
+  as printed, for 003's comparisons.
 * Fully released (for the kernel reduction of 003 §4.2(2), which belongs to the particle method):
   history column :data:`H_RELEASED` is 1.0 once some eigenvalue of Ω has reached 1 (a crack axis
   with φ = 0), else 0.0.
@@ -111,7 +131,8 @@ The law (small strain in the paper; here in the Green–Lagrange strain, see bel
   open/closed state is held (exact away from e'_ii = 0).
 
 Parameter slots (``prm``, law 4): 0 law code 4; 1 Lamé λ, Pa; 2 μ, Pa; 3 f_t, Pa; 4 release strain
-ε_0, -; 5 f_c (initial Mises yield stress), Pa; 6 hardening modulus H, Pa; 7 φ_min, -; 8 unused;
+ε_0, -; 5 f_c (initial Mises yield stress), Pa; 6 hardening modulus H, Pa; 7 φ_min, -; 8 shear
+retention β (0: eq. 7's rates as printed);
 9 relative tolerance of the yield check.
 
 History layout (:data:`N_HISTORY` = 23 columns; the point routine copies any columns beyond):
@@ -350,16 +371,26 @@ def raise_damage(e_tr, e_mid, om_old, om, phi_old, phi, eps_cr, eps_0, lam, mu):
 
 
 @njit(**JIT)
-def release_state(Q, phi, phi_min, e_sign, st):
+def release_state(Q, phi, phi_min, beta, e_sign, st):
     """The factors of eq. 7–8 at a point. st[0:3]: normal factors φ̂_i = φ_i along an open axis
     (m_i·e_sign·m_i > 0), 1 along a closed one (tension only); st[3:6]: shear release rates
-    α_yz, α_xz, α_xy = φ̃_jφ̃_k of the damage frame, φ̃ = max(φ, φ_min) (eq. 7)."""
+    α_yz, α_xz, α_xy of the damage frame: with the shear retention β > 0 the constant β on a pair
+    with a cracked axis (φ < 1) and 1 otherwise (module docstring, "Shear retention"); with β = 0
+    eq. 7 as printed, φ̃_jφ̃_k, φ̃ = max(φ, φ_min)."""
     for i in range(3):
         en = 0.0
         for k in range(3):
             for l in range(3):
                 en += Q[k, i] * e_sign[k, l] * Q[l, i]
         st[i] = phi[i] if en > 0.0 else 1.0
+    if beta > 0.0:
+        r0 = beta if phi[0] < 1.0 else 1.0
+        r1 = beta if phi[1] < 1.0 else 1.0
+        r2 = beta if phi[2] < 1.0 else 1.0
+        st[3] = min(r1, r2)
+        st[4] = min(r0, r2)
+        st[5] = min(r0, r1)
+        return
     f0 = max(phi[0], phi_min)
     f1 = max(phi[1], phi_min)
     f2 = max(phi[2], phi_min)
@@ -755,6 +786,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     fc = prm[5]
     H = prm[6]
     phi_min = prm[7]
+    beta = prm[8]
     tol = prm[9]
     Emod = mu * (3.0 * lam + 2.0 * mu) / (lam + mu)
     eps_cr = ft / Emod
@@ -840,7 +872,7 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     else:
         _identity_frame(Q, phi)
     damaged = damaged_n or grew
-    release_state(Q, phi, phi_min, Etr, st)
+    release_state(Q, phi, phi_min, beta, Etr, st)
 
     # elastic trial (eq. 8), Mises check, closest-point return with the step's matrix
     degraded_stress(Etr, Q, st, lam, mu, tmp, S)
@@ -874,10 +906,10 @@ def mortar_point(F, h_old, prm, P, h_new, A, want_tangent):
     W_r = h_old[H_W_RELEASED]
     if grew:  # midpoint rule: W(E_m; Ω_n) − W(E_m; Ω_n+1), E_m = ½(E_e,n + E_e,n+1)
         _midpoint(h_old, Ee, Em)
-        release_state(Q, phi, phi_min, Em, stm)
+        release_state(Q, phi, phi_min, beta, Em, stm)
         degraded_stress(Em, Q, stm, lam, mu, tmp, So)
         W_new = 0.5 * _ddot(Em, So)
-        release_state(Q, phio, phi_min, Em, sto)  # the same frame: the crack axes do not turn
+        release_state(Q, phio, phi_min, beta, Em, sto)  # the same frame: the crack axes do not turn
         degraded_stress(Em, Q, sto, lam, mu, tmp, So)
         W_old = 0.5 * _ddot(Em, So)
         W_r += W_old - W_new
@@ -921,6 +953,7 @@ def mortar_energy(F, h, prm):
     lam = prm[1]
     mu = prm[2]
     phi_min = prm[7]
+    beta = prm[8]
     cof, J = _cofactor(F)
     if not J > 0.0:
         return np.nan
@@ -942,7 +975,7 @@ def mortar_energy(F, h, prm):
             phi[i] = factor(om[i])
     else:
         _identity_frame(Q, phi)
-    release_state(Q, phi, phi_min, Ee, st)
+    release_state(Q, phi, phi_min, beta, Ee, st)
     degraded_stress(Ee, Q, st, lam, mu, tmp, S)
     return 0.5 * _ddot(Ee, S)
 

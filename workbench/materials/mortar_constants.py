@@ -50,16 +50,20 @@ def check_material(m) -> None:
         raise ValueError(f"H_c: {m.H_c} Pa is not allowed; the hardening modulus must be >= 0")
     if not (0.0 <= m.phi_min < 1.0):
         raise ValueError(f"phi_min: {m.phi_min} is not allowed; the floor of φ must lie in [0, 1)")
+    if not (0.0 <= m.shear_retention <= 1.0):
+        raise ValueError(f"shear_retention: {m.shear_retention} is not allowed; the shear retention "
+                         "of a crack must lie in [0, 1] (0: 003's eq. 7 as printed)")
     if not m.tol > 0:
         raise ValueError(f"tol: {m.tol} is not allowed; the tolerance must be > 0")
 
 
 def pack_params(m, p: np.ndarray) -> None:
-    """Slots 3–9 of the parameter row of a mortar (slots 0–2 are the common ones)."""
+    """Slots 3–9 of the parameter row of a mortar (slots 0–2 are the common ones; slot 8 the shear
+    retention β, 0 for eq. 7 as printed)."""
     p[3] = m.f_t
     p[4] = m.eps_release
     p[5] = m.f_c
     p[6] = m.H_c
     p[7] = m.phi_min
-    p[8] = 0.0
+    p[8] = m.shear_retention
     p[9] = m.tol

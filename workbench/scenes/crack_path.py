@@ -30,7 +30,7 @@ import workbench.scenes.model as m
 
 from ..materials import Material
 from .params import ParameterError, Scene, param
-from .shapes import Box, Plane
+from .shapes import Box, HalfSpace, Intersection, Plane
 
 
 def kink_angle(K_I: float, K_II: float) -> float:
@@ -81,12 +81,16 @@ class CrackPathPlate(Scene):
     rate: float = param(0.025, "m/s", "grip speed (each grip)", lo=0, lo_open=True)
     grow: float = param(0.02, "m", "crack growth at which the run stops", lo=0, lo_open=True)
     damping: float = param(0.0, "1/s", "mass-proportional damping (0: 5 % of critical at T1)", lo=0)
+    tab: float = param(0.01, "m", "depth of the gripped bands at Y = ±L/2, elastic (0: none)", lo=0)
 
     def check(self):
         if self.mode not in (1, 2):
             raise ParameterError(f"mode: {self.mode!r} is out of range; allowed: 1 or 2")
         if not self.a <= 0.7 * self.L:
             raise ParameterError(f"a: {self.a:g} m is out of range; allowed: (0, 0.7 L = {0.7 * self.L:g}] m")
+        if not self.tab < 0.25 * self.L:
+            raise ParameterError(f"tab: {self.tab:g} m is out of range; allowed: [0, 0.25 L = "
+                                 f"{0.25 * self.L:g}) m")
         if not self.grow < self.L - self.a:
             raise ParameterError(f"grow: {self.grow:g} m is out of range; allowed: (0, L - a = "
                                  f"{self.L - self.a:g}) m")
@@ -127,11 +131,16 @@ class CrackPathPlate(Scene):
         rollers = [] if self.mode == 1 else [m.Roller("top", 1), m.Roller("bottom", 1)]
         # the time for the nominal strain 2δ/L to reach 5 f_t/E (the crack starts well before)
         t_end = 5 * self.f_t / self.E * L / (2 * self.rate) + T1
+        regions = [m.Region("plate", Box((0.0, -L / 2), (L, L / 2)),
+                            Material.brittle(E=self.E, nu=self.nu, f_t=self.f_t, G_c=self.G_c,
+                                             rho=self.rho))]
+        if self.tab > 0:  # the gripped bands: the same elastic constants, unbreakable
+            grip = Material.svk(E=self.E, nu=self.nu, rho=self.rho)
+            regions += [m.Region(f"{side}_tab", Box((0.0, lo), (L, lo + self.tab)), grip, priority=1)
+                        for side, lo in (("bottom", -L / 2), ("top", L / 2 - self.tab))]
         return m.Model(
             dim=2, plane="strain", length=L, name=self.name,
-            regions=(m.Region("plate", Box((0.0, -L / 2), (L, L / 2)),
-                              Material.brittle(E=self.E, nu=self.nu, f_t=self.f_t, G_c=self.G_c,
-                                               rho=self.rho)),),
+            regions=tuple(regions),
             cracks=(m.PreCrack("crack", ((-dx, 0.0), (a, 0.0))),),
             sets=(m.Set("top", Plane(1, L / 2)), m.Set("bottom", Plane(1, -L / 2))),
             constraints=tuple(grips + rollers),
@@ -139,6 +148,32 @@ class CrackPathPlate(Scene):
                              stop=(m.Threshold("tip_length", above=self.grow),)),
             observables=(m.CrackTip("tip", "crack"),
                          m.Reaction("grip", "top", axis)))
+
+    def critical_energy_release(self) -> float:
+        """G at the crack's onset by LEFM, J/m²: G_c in mode I; in mode II the maximum-hoop-stress
+        criterion's K_IIc = (√3/2) K_Ic, so G_IIc = K_IIc²/E' = ¾ G_c."""
+        return self.G_c if self.mode == 1 else 0.75 * self.G_c
+
+    def elastic_half(self, a: float, grip: float = 1e-6) -> m.Model:
+        """The elastic plate above the crack's line (0 ≤ Y ≤ L/2), crack length ``a``, with the top
+        grip moved by ``grip`` (m) in the loading's direction: the LEFM reference of the onset
+        (``studies.crack_path.lefm_onset``) by the FEM, which cuts no elements. Mode I is symmetric
+        about Y = 0: the ligament X ≥ a on a roller in y, the crack face free. Mode II is
+        antisymmetric (u_x odd, u_y even in Y): the ligament held in x, the crack face free, the
+        grip's u_y = 0. One static step; ``grip`` small (geometrically linear)."""
+        L, axis = self.L, (1 if self.mode == 1 else 0)
+        ligament = Intersection((Plane(1, 0.0), HalfSpace((a, 0.0), (-1.0, 0.0))))
+        constraints = [m.Roller("ligament", axis),
+                       m.Prescribed("top", axis, displacement=m.Proportional(grip))]
+        if self.mode == 2:
+            constraints.append(m.Roller("top", 1))
+        return m.Model(
+            dim=2, plane="strain", length=L, name=f"{self.name}_half",
+            regions=(m.Region("plate", Box((0.0, 0.0), (L, L / 2)),
+                              Material.svk(E=self.E, nu=self.nu, rho=self.rho)),),
+            sets=(m.Set("top", Plane(1, L / 2)), m.Set("ligament", ligament)),
+            constraints=tuple(constraints), drive=m.Static(path=(1.0,)),
+            observables=(m.Reaction("grip", "top", axis),))
 
     def summarise(self, out: dict) -> dict:
         return {}
