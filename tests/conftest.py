@@ -41,8 +41,15 @@ def _start_verify(config) -> dict:
 
 @pytest.hookimpl(trylast=True)  # after -k / -m have deselected
 def pytest_collection_modifyitems(session, config, items):
-    if any("quick_verify" in getattr(item, "fixturenames", ()) for item in items):
+    """Start the session's verify when a test needs it, and run the modules that read it last (in
+    their order, each module whole, so that its module fixtures are set up once): the verify runs
+    beside every other test instead of the test process waiting for it at the first that reads it."""
+    needs = {item.module.__name__ for item in items
+             if "quick_verify" in getattr(item, "fixturenames", ())}
+    if needs:
         _start_verify(config)
+        items[:] = ([i for i in items if i.module.__name__ not in needs]
+                    + [i for i in items if i.module.__name__ in needs])
 
 
 def pytest_unconfigure(config):
