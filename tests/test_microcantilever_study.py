@@ -1035,3 +1035,26 @@ def test_csph_bl_beside_csph(monkeypatch, tmp_path):
     cracked(ds, tmp_path / "cracks.png")
     titles = [ax.get_title() for ax in figs[0].axes if ax.collections]
     assert len(titles) == 6 and sum("csph_bl" in t for t in titles) == 2, titles
+
+
+def test_run_makes_the_csph_bl_runs(monkeypatch):
+    """study.run with csph_bl among the solvers makes its runs under the default rule beside
+    csph's (the quick run: csph alone unless asked), on the same resolutions."""
+    from studies.microcantilever import study
+
+    seen = []
+
+    def fake_tasks(tasks, scheduler, title):
+        seen.extend(tasks)
+        return [_made_up_run(150.0 if t.solver == "csph_bl" else 180.0) for t in tasks]
+
+    monkeypatch.setattr(study, "run_tasks", fake_tasks)
+    monkeypatch.setattr(study, "fem_ladder", lambda *a, **k: None)
+    ds = study.run(quick=True)
+    assert {t.solver for t in seen} == {"csph"} and list(ds.solver.values) == ["csph"]
+    seen.clear()
+    ds = study.run(quick=True, solvers=["csph", "csph_bl"])
+    runs = sorted((t.solver, t.scene.case, t.scene.name.split("_")[-1], t.resolution) for t in seen)
+    assert runs == [("csph", "inter", "compression", 5), ("csph", "intra", "compression", 5),
+                    ("csph_bl", "inter", "compression", 5), ("csph_bl", "intra", "compression", 5)]
+    assert list(ds.solver.values) == ["csph", "csph_bl"]
