@@ -131,7 +131,7 @@ def _tolerance(r0: int, e0: float, r: int) -> float:
 
 def _runs(ds, rules=GATED_RULES, solvers=GATED_SOLVERS):
     """(case, rule, H/Δx, selection) of each run of ``solvers`` under ``rules`` that ran."""
-    for solver in ds.solver.values:
+    for solver in (ds.solver.values if "solver" in ds.coords else ()):
         if solver not in solvers:
             continue
         for case in ds.case.values:
@@ -258,11 +258,11 @@ def crack_convergence_gates(ds: xr.Dataset) -> list[Gate]:
     from .derive import _order3
 
     g = []
-    H = float(ds.attrs["param_H"])
     for case in ds.case.values:
         res, x, reg, peak = crack_ladder(ds, str(case))
         if len(res) < 3:
             continue
+        H = float(ds.attrs["param_H"])
         tag = f"microcantilever {case} compression H/dx={', '.join(map(str, res))}"
         g.append(Gate.at_most(
             f"{tag}: crack position, |x(H/dx={res[-1]}) - x(H/dx={res[-2]})| / (H/{res[-2]})",
