@@ -76,8 +76,8 @@ def test_microcantilever_quick_study(quick_verify):
         gates = studies.get("microcantilever").gates(ds)
         bad = [g.line() for g in gates if not g.passed]
         assert not bad, bad
-        # 12 (six per case) + the FEM ladder + the slope of each case: the study's declared count
-        assert len(gates) == studies.get("microcantilever").N_GATES[True] == 15
+        # 10 (five per case) + the FEM ladder + the slope of each case: the study's declared count
+        assert len(gates) == studies.get("microcantilever").N_GATES[True] == 13
         for v in ("load", "deflection", "failed_fraction", "external_work", "kinetic_energy",
                   "fem_load", "fem_elastic_slope", "slope_error_fem", "elastic_energy",
                   "plastic_work", "released_energy", "fracture_energy"):
@@ -1058,3 +1058,19 @@ def test_run_makes_the_csph_bl_runs(monkeypatch):
     assert runs == [("csph", "inter", "compression", 5), ("csph", "intra", "compression", 5),
                     ("csph_bl", "inter", "compression", 5), ("csph_bl", "intra", "compression", 5)]
     assert list(ds.solver.values) == ["csph", "csph_bl"]
+
+
+def test_fragment_gate():
+    """Issue 36's bar, relative to the faces: a run whose failed particles carry 0.4 % of the
+    released energy relative to the intact particles around them passes, one with 13.8 % (intra,
+    2-D H/Δx = 5, before they merged into the faces) fails."""
+    import xarray as xr
+
+    from studies.microcantilever.gates import fragment_gates
+
+    sel = dict(solver="csph", case="intra", rule="compression", resolution=5)
+    for share, ok in ((0.004, True), (0.138, False)):
+        ds = xr.Dataset(dict(fragment_relative_kinetic_share=(tuple(sel), np.full((1,) * 4, share))),
+                        coords={k: [v] for k, v in sel.items()})
+        (g,) = fragment_gates(ds, "t", sel)
+        assert g.passed is ok
