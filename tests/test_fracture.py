@@ -274,7 +274,8 @@ def test_an_opened_failed_particle_merges_into_the_faces():
     w = mb / mb.sum()
     assert np.allclose(v[a], w @ v[partners], rtol=0, atol=1e-12)  # it rides on its partners
     assert np.allclose(x[a], X[a] + w @ (x[partners] - X[partners]), rtol=0, atol=1e-15)
-    assert d.V[a] == 0.0 and body.dissipated()["merge_dissipation"] == pytest.approx(lost, rel=1e-12)
+    assert d.V[a] == 0.0
+    assert body.dissipated()["merge_dissipation"] == pytest.approx(lost, rel=1e-12)
     others = np.setdiff1d(np.arange(ps.n), np.r_[partners, a])
     assert np.array_equal(v[others], before[others]) and np.array_equal(d.m[others], m0[others])
 
@@ -354,8 +355,8 @@ TOL_BALANCE = 0.01  # issue 11 gate 2
 
 def balance_error(out, drop=None):
     W = out["external_work"]
-    terms = {k: out[k] for k in ("kinetic_energy", "strain_energy", "plastic_work", "released_energy",
-                                 "merge_dissipation")}
+    terms = {k: out[k] for k in ("kinetic_energy", "strain_energy", "plastic_work",
+                                 "released_energy", "merge_dissipation")}
     E = sum(v for k, v in terms.items() if k != drop)
     on = W > 1e-6 * W.max()
     return np.abs(W[on] - E[on]) / W[on]
@@ -364,9 +365,9 @@ def balance_error(out, drop=None):
 def test_energy_balance(run2d):
     """External work (the work of the prescribed motion) = kinetic + elastic + plastic work +
     released energy + the kinetic energy lost merging opened failed particles into the faces of
-    their crack (sph.crack.Cracks.merge) within 1 % of the external work at every output time (issue 11, gate 2), in
-    a run that fails and separates (velocity Verlet's discrete work balances to O(dt²); a failure,
-    a jump of stress within a step, costs of the order of 1e-3)."""
+    their crack (sph.crack.Cracks.merge) within 1 % of the external work at every output time
+    (issue 11, gate 2), in a run that fails and separates (velocity Verlet's discrete work balances
+    to O(dt²); a failure, a jump of stress within a step, costs of the order of 1e-3)."""
     assert run2d["status"] == "ok"
     assert run2d["failed"][-1] > 0 and run2d["released_energy"][-1] > 0
     assert run2d["plastic_work"][-1] > 0
@@ -374,8 +375,8 @@ def test_energy_balance(run2d):
     assert err.max() < TOL_BALANCE, err.max()
 
 
-@pytest.mark.parametrize("drop", ["kinetic_energy", "strain_energy", "plastic_work", "released_energy",
-                                  "merge_dissipation"])
+@pytest.mark.parametrize("drop", ["kinetic_energy", "strain_energy", "plastic_work",
+                                  "released_energy", "merge_dissipation"])
 def test_energy_balance_needs_every_term(run2d, drop):
     """Without any one of the five terms the balance fails the 1 % tolerance: the test above
     cannot pass with a term missing or zero."""

@@ -957,7 +957,8 @@ def test_crack_position_and_its_convergence_gates():
 
     dx = 0.5e-6
     out = _lattice_out([(4, j) for j in range(11)] + [(16, 10)], dx)
-    out.update(region=np.where(np.arange(len(out["X"])) % 2 == 0, 1, 0), region_names=["grain0", "gb01"])
+    out.update(region=np.where(np.arange(len(out["X"])) % 2 == 0, 1, 0),
+               region_names=["grain0", "gb01"])
     x, reg = crack_position(out, dx)
     assert x == pytest.approx(4 * dx) and reg == "gb01"  # 6 of the 11 have an even index
 
@@ -970,8 +971,9 @@ def test_crack_position_and_its_convergence_gates():
                                t_separated=(("solver", "case", "rule", "resolution"), val(1e-6)),
                                crack_region=(("solver", "case", "rule", "resolution"),
                                              np.full(shp, "gb01"))),
-                          coords=dict(solver=["csph"], case=["inter", "intra"], rule=["compression"],
-                                      resolution=res), attrs=dict(param_H=5e-6))
+                          coords=dict(solver=["csph"], case=["inter", "intra"],
+                                      rule=["compression"], resolution=res),
+                          attrs=dict(param_H=5e-6))
 
     H = 5e-6
     peaks = [200 - 100 * (5 / r) for r in (5, 10, 15, 20)]
@@ -1070,7 +1072,8 @@ def test_fragment_gate():
 
     sel = dict(solver="csph", case="intra", rule="compression", resolution=5)
     for share, ok in ((0.004, True), (0.138, False)):
-        ds = xr.Dataset(dict(fragment_relative_kinetic_share=(tuple(sel), np.full((1,) * 4, share))),
+        var = (tuple(sel), np.full((1,) * 4, share))
+        ds = xr.Dataset(dict(fragment_relative_kinetic_share=var),
                         coords={k: [v] for k, v in sel.items()})
         (g,) = fragment_gates(ds, "t", sel)
         assert g.passed is ok

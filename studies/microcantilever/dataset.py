@@ -24,10 +24,11 @@ SERIES = {"load": ("load", "N", "force of the loading patch on the beam, downwar
           "kinetic_energy": ("kinetic_energy", "J", "kinetic energy"),
           "elastic_energy": ("strain_energy", "J", "stored (elastic) energy"),
           "plastic_work": ("plastic_work", "J", "plastic work"),
-          "released_energy": ("released_energy", "J", "stored energy released by failure and cracking"),
-          "merge_dissipation": ("merge_dissipation", "J", "kinetic energy taken by the merge of the "
-                                "opened failed particles into the faces of their crack "
-                                "(sph.crack.Cracks.merge)")}
+          "released_energy": ("released_energy", "J",
+                              "stored energy released by failure and cracking"),
+          "merge_dissipation": ("merge_dissipation", "J",
+                                "kinetic energy taken by the merge of the opened failed particles "
+                                "into the faces of their crack (sph.crack.Cracks.merge)")}
 FAILED = {"all": "failed", "grains": "failed_grains", "boundaries": "failed_gb"}
 
 PLANE_3D = "none (3-D)"
@@ -255,8 +256,9 @@ def _fem_variables(ds: xr.Dataset, fem: dict, outs: dict, rules, res) -> None:
         if len(out.get("time", ())) > 3:
             fail = np.flatnonzero(np.asarray(out["failed"]) > 0)
             tf = float(np.asarray(out["time"])[fail[0]]) if fail.size else np.inf
-            slope[solvers.index(solver), CASES.index(case), rules.index(rule), res.index(r)] = csph_slope(
-                out["deflection_down"], out["load"], out["time"], tf, fem["window"])
+            k = (solvers.index(solver), CASES.index(case), rules.index(rule), res.index(r))
+            slope[k] = csph_slope(out["deflection_down"], out["load"], out["time"], tf,
+                                  fem["window"])
     lim = fem["slope_limit"]
     data["elastic_slope_fem_window"] = (dims, slope, {
         "units": force + "/m", "long_name": "csph elastic slope over the FEM's elastic window"})

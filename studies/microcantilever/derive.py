@@ -272,8 +272,9 @@ def fragment_measures(out: dict, scene: MicroCantilever, spacing: float | None =
         for k, a in enumerate(idx):
             near = intact[tree.query_ball_point(X[a], FACE_REACH * spacing * (1 + 1e-9))]
             rel[k] = np.linalg.norm(v[a] - (v[near].mean(axis=0) if near.size else 0.0))
+        ke = 0.5 * scene.rho * float(V[idx] @ rel ** 2)
         res.update(fragment_relative_speed_max=float(rel.max()),
-                   fragment_relative_kinetic_share=share(0.5 * scene.rho * float(V[idx] @ rel ** 2)))
+                   fragment_relative_kinetic_share=share(ke))
     return res
 
 
@@ -313,7 +314,8 @@ def run_summary(out: dict, scene: MicroCantilever, resolution: int | None = None
     s["max_load"] = float(np.max(F[upto]))  # the dynamic peak: the largest load until the cut
     W = np.asarray(out["external_work"])
     E = (np.asarray(out["kinetic_energy"]) + np.asarray(out["strain_energy"])
-         + np.asarray(out.get("plastic_work", 0 * t)) + np.asarray(out.get("released_energy", 0 * t))
+         + np.asarray(out.get("plastic_work", 0 * t))
+         + np.asarray(out.get("released_energy", 0 * t))
          + np.asarray(out.get("merge_dissipation", 0 * t)))
     on = W > 1e-6 * np.max(np.abs(W))
     if on.any():

@@ -50,7 +50,8 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
                         continue
                     sc.model(scene.H / r)  # a crack band too narrow for the spacing: bad input
                     opts = options_for(sc, rule)
-                    if fields is not None and (field_runs is None or (solver, r) in set(field_runs)):
+                    if fields is not None and (field_runs is None
+                                               or (solver, r) in set(field_runs)):
                         opts["fields"] = str(fields)
                     tasks.append(Task.make(solver, sc, r, **opts))
                     keys.append((solver, case, rule, r))
