@@ -252,6 +252,7 @@ class CSPH(ParticleBody):
         self._h_scratch = self.tl.history.copy()
         self._V_work = disc.V_energy.copy()  # the volumes of the plastic and released work
         self.cracks = None
+        self._fixed = None  # the prescribed DOFs of the last advance (sph.crack merges none)
         mats = ps.table.materials
         from workbench.materials.failure import can_fail
 
@@ -272,9 +273,12 @@ class CSPH(ParticleBody):
     def advance(self, n, dt, f_ext, fixed, v_fix, damping=0.0, extra=None) -> int:
         if extra is not None:
             return super().advance(n, dt, f_ext, fixed, v_fix, damping, extra)
+        self._fixed = fixed
         done = tl.advance(self.tl, self.x, self.v, self.acc, f_ext, fixed, v_fix, dt, damping, n,
                           self._h_scratch, self.impulse,
                           self._update_cracks if self.cracks is not None else None)
+        if self.cracks is not None and self.cracks.rides:  # where the merged particles are
+            self.cracks.place(self.x, self.v)
         self.steps += done
         self.t += done * dt
         return done
@@ -289,7 +293,7 @@ class CSPH(ParticleBody):
             return False
         failed = failed_points(self.tl.table, self.tl.mat_id, self.tl.history)
         before = self.cracks.updates
-        self.cracks.update(failed, self.x, self.stored_energy)
+        self.cracks.update(failed, self.x, self.stored_energy, self.v, self._fixed)
         return self.cracks.updates != before
 
     def internal_force(self, x):
@@ -328,13 +332,15 @@ class CSPH(ParticleBody):
         of every law that keeps them — J2 and the mortar of 003,
         :func:`sph.diagnostics.dissipated_work` — times the integration volumes (the volumes of
         the stored energy), the released energy with what the crack pairs released
-        (:mod:`sph.crack`)."""
+        (:mod:`sph.crack`), and with cracks ``merge_dissipation``: the kinetic energy the merge of
+        the opened failed particles into the faces took (:meth:`sph.crack.Cracks.merge`)."""
         from .diagnostics import dissipated_work
 
         b = self.tl
         out = dissipated_work(b.table, b.mat_id, b.history, self._V_work)
         if out and self.cracks is not None:
             out["released_energy"] += self.cracks.released
+            out["merge_dissipation"] = self.cracks.merge_dissipated
         return out
 
     def components(self):

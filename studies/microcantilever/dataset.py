@@ -24,7 +24,11 @@ SERIES = {"load": ("load", "N", "force of the loading patch on the beam, downwar
           "kinetic_energy": ("kinetic_energy", "J", "kinetic energy"),
           "elastic_energy": ("strain_energy", "J", "stored (elastic) energy"),
           "plastic_work": ("plastic_work", "J", "plastic work"),
-          "released_energy": ("released_energy", "J", "stored energy released by failure and cracking")}
+          "released_energy": ("released_energy", "J",
+                              "stored energy released by failure and cracking"),
+          "merge_dissipation": ("merge_dissipation", "J",
+                                "kinetic energy taken by the merge of the opened failed particles "
+                                "into the faces of their crack (sph.crack.Cracks.merge)")}
 FAILED = {"all": "failed", "grains": "failed_grains", "boundaries": "failed_gb"}
 
 PLANE_3D = "none (3-D)"
@@ -32,12 +36,16 @@ PLANE_3D = "none (3-D)"
 
 
 def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
-            static: dict | None = None, deletion: dict | None = None) -> xr.Dataset:
-    """The study's dataset from the runs ``outs`` {(case, rule, resolution): driver output} and
-    the FEM reference ``fem`` (:func:`.static.fem_ladder`, or None)."""
+            static: dict | None = None, deletion: dict | None = None,
+            solvers=("csph",)) -> xr.Dataset:
+    """The study's dataset from the runs ``outs`` {(solver, case, rule, resolution): driver
+    output} (``solvers`` in that order; a key of three is csph's) and the FEM reference ``fem``
+    (:func:`.static.fem_ladder`, or None)."""
+    outs = {(k if len(k) == 4 else ("csph",) + tuple(k)): v for k, v in outs.items()}
+    solvers = list(solvers)
     time = np.linspace(0.0, scene.t_end, N_TIME)
     dims = ("solver", "case", "rule", "resolution")
-    shp = (1, len(CASES), len(rules), len(res))
+    shp = (len(solvers), len(CASES), len(rules), len(res))
     series = {n: np.full(shp + (N_TIME,), np.nan) for n in SERIES}
     failed = np.full(shp + (len(FAILED), N_TIME), np.nan)
     scal = {}
@@ -47,8 +55,8 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
     steps = np.zeros(shp, np.int64)
     pss = np.full(shp, np.nan)
     finest = {}
-    for (case, rule, r), out in outs.items():
-        idx = (0, CASES.index(case), rules.index(rule), res.index(r))
+    for (solver, case, rule, r), out in outs.items():
+        idx = (solvers.index(solver), CASES.index(case), rules.index(rule), res.index(r))
         status[idx] = str(out.get("status", "error: no status"))
         wall[idx] = float(out.get("run_wall_time", out.get("wall_time", np.nan)))
         npart[idx] = int(out.get("n_particles", 0))
@@ -65,8 +73,8 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
         for k, v in run_summary(out, dataclasses.replace(scene, case=case), r).items():
             scal.setdefault(k, np.full(shp, "" if isinstance(v, str) else np.nan, dtype=object
                                        if isinstance(v, str) else float))[idx] = v
-        if "x" in out and r >= finest.get((case, rule), (0, None))[0]:
-            finest[(case, rule)] = (r, out)
+        if "x" in out and r >= finest.get((solver, case, rule), (0, None))[0]:
+            finest[(solver, case, rule)] = (r, out)
     data = {n: (dims + ("time",), series[n], {"units": u, "long_name": ln})
             for n, (_, u, ln) in SERIES.items()}
     data["failed_fraction"] = (dims + ("part", "time"), failed, {
@@ -83,12 +91,15 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
                  tail_load_ratio="-", separated="-", connected="-", crack_regions="-",
                  released_final="J", fracture_energy="J", fracture_energy_all="J", n_crack="-",
                  fracture_energy_end="J", fragment_speed_max="m/s", fragment_kinetic_share="-",
+                 fragment_relative_speed_max="m/s", fragment_relative_kinetic_share="-",
+                 crack_x="m", crack_region="-", max_load="N",
                  t_separated="s", t_last="s")
     for k, arr in scal.items():
         if k == "separated":
             arr = arr.astype(float)
-        data[k] = (dims, arr.astype(str) if k == "crack_regions" else arr, {"units": units[k]})
-    coords = {"solver": ["csph"], "case": list(CASES), "rule": list(rules),
+        data[k] = (dims, arr.astype(str) if k in ("crack_regions", "crack_region") else arr,
+                   {"units": units[k]})
+    coords = {"solver": solvers, "case": list(CASES), "rule": list(rules),
               "resolution": ("resolution", np.array(res), {"units": "-", "long_name":
                                                            "particles across H"}),
               "time": ("time", time, {"units": "s"}), "part": list(FAILED)}
@@ -102,7 +113,7 @@ def dataset(scene, outs: dict, rules, res, fem: dict | None = None,
                 _root_variables(ds, fem, static)
     if deletion:
         _deletion_variables(ds, deletion)
-    _final_particles(ds, finest, rules)
+    _final_particles(ds, finest, rules, solvers)
     ds.attrs.update(results.provenance(NAME, scene))
     ds.attrs["rules"] = "; ".join(f"{k}: failure {a}, crack {b}" for k, (a, b) in RULES.items()
                                   if k in rules)
@@ -238,14 +249,16 @@ def _fem_variables(ds: xr.Dataset, fem: dict, outs: dict, rules, res) -> None:
     data["fem_first_failure_deflection"] = (("case", "fem_resolution"), ff[..., 0], {"units": "m"})
     data["fem_first_failure_load"] = (("case", "fem_resolution"), ff[..., 1], {"units": force})
     dims = ("solver", "case", "rule", "resolution")
-    shp = (1, len(CASES), len(rules), len(res))
+    solvers = list(ds.solver.values)
+    shp = (len(solvers), len(CASES), len(rules), len(res))
     slope = np.full(shp, np.nan)
-    for (case, rule, r), out in outs.items():
+    for (solver, case, rule, r), out in outs.items():
         if len(out.get("time", ())) > 3:
             fail = np.flatnonzero(np.asarray(out["failed"]) > 0)
             tf = float(np.asarray(out["time"])[fail[0]]) if fail.size else np.inf
-            slope[0, CASES.index(case), rules.index(rule), res.index(r)] = csph_slope(
-                out["deflection_down"], out["load"], out["time"], tf, fem["window"])
+            k = (solvers.index(solver), CASES.index(case), rules.index(rule), res.index(r))
+            slope[k] = csph_slope(out["deflection_down"], out["load"], out["time"], tf,
+                                  fem["window"])
     lim = fem["slope_limit"]
     data["elastic_slope_fem_window"] = (dims, slope, {
         "units": force + "/m", "long_name": "csph elastic slope over the FEM's elastic window"})
@@ -265,35 +278,38 @@ def _fem_variables(ds: xr.Dataset, fem: dict, outs: dict, rules, res) -> None:
                     fem_assumed_order=SINGULAR_ORDER)
 
 
-def _final_particles(ds: xr.Dataset, finest: dict, rules) -> None:
-    """The final particles of the finest run of each case and rule (padded to the largest count);
-    ``finest`` {(case, rule): (resolution, driver output)}."""
+def _final_particles(ds: xr.Dataset, finest: dict, rules, solvers=("csph",)) -> None:
+    """The final particles of the finest run of each solver, case and rule (padded to the largest
+    count); ``finest`` {(solver, case, rule): (resolution, driver output)}."""
     if not finest:
         return
+    solvers = list(solvers)
     n = max(len(o["x"]) for _, o in finest.values())
     d = next(iter(finest.values()))[1]["x"].shape[1]
-    X = np.full((len(CASES), len(rules), n, d), np.nan)
+    shp = (len(solvers), len(CASES), len(rules))
+    X = np.full(shp + (n, d), np.nan)
     x = np.full_like(X, np.nan)
-    grain = np.full((len(CASES), len(rules), n), -1, np.int64)
-    failed = np.zeros((len(CASES), len(rules), n), np.int8)
+    grain = np.full(shp + (n,), -1, np.int64)
+    failed = np.zeros(shp + (n,), np.int8)
     names = None
-    at = np.zeros((len(CASES), len(rules)), np.int64)
-    for (case, rule), (r, o) in finest.items():
-        i, j = CASES.index(case), rules.index(rule)
-        at[i, j] = r
+    at = np.zeros(shp, np.int64)
+    for (solver, case, rule), (r, o) in finest.items():
+        k = (solvers.index(solver), CASES.index(case), rules.index(rule))
+        at[k] = r
         m = len(o["x"])
-        X[i, j, :m], x[i, j, :m] = o["X"], o["x"]
-        grain[i, j, :m] = o["region"]
-        failed[i, j, :m] = np.asarray(o.get("failed_particles", np.zeros(m)), np.int8)
+        X[k][:m], x[k][:m] = o["X"], o["x"]
+        grain[k][:m] = o["region"]
+        failed[k][:m] = np.asarray(o.get("failed_particles", np.zeros(m)), np.int8)
         names = o["region_names"]
-    ds["particle_X"] = (("case", "rule", "particle", "axis"), X, {"units": "m", "long_name":
+    dims = ("solver", "case", "rule")
+    ds["particle_X"] = (dims + ("particle", "axis"), X, {"units": "m", "long_name":
                         "reference positions, finest resolution (NaN: padding)"})
-    ds["particle_x"] = (("case", "rule", "particle", "axis"), x, {"units": "m", "long_name":
+    ds["particle_x"] = (dims + ("particle", "axis"), x, {"units": "m", "long_name":
                         "final positions, finest resolution"})
-    ds["particle_region"] = (("case", "rule", "particle"), grain, {"units": "-", "long_name":
+    ds["particle_region"] = (dims + ("particle",), grain, {"units": "-", "long_name":
                              "region index into the attribute region_names (-1: padding)"})
-    ds["particle_failed"] = (("case", "rule", "particle"), failed, {"units": "-"})
-    ds["particle_resolution"] = (("case", "rule"), at, {"units": "-", "long_name":
+    ds["particle_failed"] = (dims + ("particle",), failed, {"units": "-"})
+    ds["particle_resolution"] = (dims, at, {"units": "-", "long_name":
                                  "H/dx of the run whose final particles these are (0: none)"})
     ds.attrs["region_names"] = ", ".join(names)
 

@@ -25,11 +25,16 @@ def plot(ds: xr.Dataset, outdir) -> list:
     # load–deflection
     fig, axes = plt.subplots(1, len(ds.case), figsize=(6 * len(ds.case), 4.2), squeeze=False)
     for ax, case in zip(axes[0], ds.case.values):
-        for rule in ds.rule.values:
-            for r in ds.resolution.values:
-                sel = dict(solver="csph", case=case, rule=rule, resolution=r)
-                ax.plot(ds.deflection.sel(**sel) * 1e6, ds["load"].sel(**sel), ls=styles.get(str(rule), "-"),
-                        lw=1, label=f"{rule}, H/dx = {int(r)}")
+        for solver in ds.solver.values:
+            for rule in ds.rule.values:
+                for r in ds.resolution.values:
+                    sel = dict(solver=solver, case=case, rule=rule, resolution=r)
+                    if str(ds.status.sel(**sel).values) == "not run":
+                        continue
+                    ax.plot(ds.deflection.sel(**sel) * 1e6, ds["load"].sel(**sel),
+                            ls="-." if solver == "csph_bl" else styles.get(str(rule), "-"), lw=1,
+                            label=("" if solver == "csph" else f"{solver} (000 as printed), ")
+                            + f"{rule}, H/dx = {int(r)}")
         if "fem_load" in ds:  # the static FEM (no damage) to the first failure of this case
             for r in ds.fem_resolution.values:
                 u = float(ds.fem_first_failure_deflection.sel(case=case, fem_resolution=r))
@@ -66,12 +71,15 @@ def plot(ds: xr.Dataset, outdir) -> list:
         ax = axes[1, k]
         sel = dict(solver="csph", case=case, rule=rule, resolution=ds.resolution.values[-1])
         total = 0
-        for n in ("kinetic_energy", "elastic_energy", "plastic_work", "released_energy"):
-            y = ds[n].sel(**sel)
+        for n in ("kinetic_energy", "elastic_energy", "plastic_work", "released_energy",
+                  "merge_dissipation"):
+            if n not in ds:
+                continue
+            y = ds[n].sel(**sel).fillna(0.0) if n == "merge_dissipation" else ds[n].sel(**sel)
             total = total + y
             ax.plot(ds.time * 1e6, y, lw=1, label=n)
         ax.plot(ds.time * 1e6, ds.external_work.sel(**sel), "k", lw=2, label="external work")
-        ax.plot(ds.time * 1e6, total, "y--", lw=1, label="sum of the four")
+        ax.plot(ds.time * 1e6, total, "y--", lw=1, label="their sum")
         ax.set_xlabel("time [us]")
         ax.set_ylabel("energy [J/m]" if ds.attrs.get("plane") == "strain" else "energy [J]")
         ax.grid(True, alpha=0.3)
@@ -141,20 +149,25 @@ def crack_figure(ds: xr.Dataset):
     import matplotlib.pyplot as plt
 
     names = ds.attrs["region_names"].split(", ")
-    rules = list(ds.rule.values)
+    solvers = list(ds.solver.values) if "solver" in ds.particle_x.dims else [None]
+    # one row per solver and rule with particles (csph_bl runs the default rule only)
+    maps = [(s, rule) for s in solvers for rule in ds.rule.values
+            if s is None or int(ds.particle_resolution.sel(solver=s, rule=rule).max()) > 0]
     fem = "fem_element_deleted" in ds
-    rows = len(rules) + int(fem)
+    rows = len(maps) + int(fem)
     fig, axes = plt.subplots(rows, len(ds.case), figsize=(6 * len(ds.case), 2.6 * rows),
                              squeeze=False)
     palette = np.array(["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown",
                         "tab:pink", "tab:olive", "tab:cyan"])
     for i, case in enumerate(ds.case.values):
-        for j, rule in enumerate(rules):
+        for j, (solver, rule) in enumerate(maps):
             ax = axes[j, i]
-            X = ds.particle_X.sel(case=case, rule=rule).values
-            x = ds.particle_x.sel(case=case, rule=rule).values
-            reg = ds.particle_region.sel(case=case, rule=rule).values
-            bad = ds.particle_failed.sel(case=case, rule=rule).values.astype(bool)
+            on = dict(case=case, rule=rule, **({} if solver is None else dict(solver=solver)))
+            X = ds.particle_X.sel(**on).values
+            x = ds.particle_x.sel(**on).values
+            reg = ds.particle_region.sel(**on).values
+            bad = ds.particle_failed.sel(**on).values.astype(bool)
+            at = int(ds.particle_resolution.sel(**on))
             ok = reg >= 0
             if not ok.any():
                 ax.set_axis_off()
@@ -162,7 +175,7 @@ def crack_figure(ds: xr.Dataset):
             if X.shape[1] == 3:
                 # the lattice plane nearest the beam's mid-plane y = 0 (the lattice starts at the
                 # block's side face: at even particle counts across B the planes straddle y = 0)
-                dx = float(ds.attrs["param_H"]) / int(ds.particle_resolution.sel(case=case, rule=rule))
+                dx = float(ds.attrs["param_H"]) / at
                 mid = X[ok, 1][np.argmin(np.abs(X[ok, 1]))]
                 ok &= np.abs(X[:, 1] - mid) <= 0.25 * dx
             up = X.shape[1] - 1
@@ -175,8 +188,8 @@ def crack_figure(ds: xr.Dataset):
             ax.set_xlim(*xlim)
             ax.set_ylim(*ylim)
             ax.set_aspect("equal")
-            ax.set_title(f"{case}-granular, {rule}, H/dx = "
-                         f"{int(ds.particle_resolution.sel(case=case, rule=rule))}", fontsize=9)
+            ax.set_title(("" if solver in (None, "csph") else f"{solver} (000 as printed), ")
+                         + f"{case}-granular, {rule}, H/dx = {at}", fontsize=9)
             ax.set_xlabel("x [um]")
             ax.set_ylabel(("y" if up == 1 else "z") + " [um]")
         if fem:  # the FEM with element deletion: element centres, reference configuration

@@ -74,6 +74,14 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                 f"the same H/h; csph first failure {float(ds.load_at_first_failure.sel(**sel)):.4g} "
                 f"{f_unit} at {float(ds.deflection_at_first_failure.sel(**sel)) * 1e6:.3g} um; "
                 f"kinetic/elastic {float(ds.kinetic_ratio.sel(**sel)):.2e}.")
+        for case, rule, r, sel in _runs(ds, tuple(ds.rule.values), ("csph_bl",)):
+            notes.append(
+                f"csph_bl (000 as printed; shown, not gated), {case}, {rule}, H/dx = {r}: slope "
+                f"{float(ds.elastic_slope_fem_window.sel(**sel)):.5g} {f_unit}/m, "
+                f"{100 * float(ds.slope_error_fem.sel(**sel)):.2f} % from the FEM's limit, "
+                f"{100 * float(ds.slope_vs_fem_same_resolution.sel(**sel)):+.2f} % from the FEM at "
+                f"the same H/h; first failure {float(ds.load_at_first_failure.sel(**sel)):.4g} "
+                f"{f_unit} at {float(ds.deflection_at_first_failure.sel(**sel)) * 1e6:.3g} um.")
     if "static_elastic_slope" in ds and "fem_slope_limit" in ds.attrs:
         sr = ds.static_resolution.values
         notes.append(
@@ -129,13 +137,16 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                 f"is), peak load {peak:.4g} N/m, mean load over the last 20 % "
                 f"{(f'{100 * tail.mean() / peak:.2g} %' if tail.size else 'n/a')} of it, "
                 f"{float(ds.fem_deletion_wall_time.sel(case=case)):.0f} s.")
-    for case, rule, r, sel in _runs(ds, tuple(ds.rule.values)):
+    notes += comparison_notes(ds)
+    notes += crack_ladder_notes(ds)
+    for case, rule, r, sel in _runs(ds, tuple(ds.rule.values), tuple(ds.solver.values)):
         v = {k: ds[k].sel(**sel).values for k in ("peak_load", "t_first_failure", "n_failed",
                                                    "share_boundaries", "tail_load_ratio", "separated",
                                                    "connected", "energy_balance_error",
                                                    "crack_regions", "t_separated", "t_last")}
         unit = "N/m" if ds.attrs.get("plane") == "strain" else "N"
-        notes.append(f"{case}, {rule}, H/dx = {r}: peak load before failure "
+        notes.append(("" if sel["solver"] == "csph" else f"{sel['solver']}, ")
+                     + f"{case}, {rule}, H/dx = {r}: peak load before failure "
                      f"{float(v['peak_load']):.4g} {unit}, first failure at "
                      f"{float(v['t_first_failure']) * 1e6:.3g} us, {int(v['n_failed'])} failed "
                      f"particles ({100 * float(v['share_boundaries']):.0f} % in grain boundaries; "
@@ -148,4 +159,70 @@ def report_notes(ds: xr.Dataset) -> list[str]:
                         if np.isfinite(float(v['t_separated'])) else "never cut apart")
                      + f", run to {float(v['t_last']) * 1e6:.3g} us), energy balance error "
                      f"{float(v['energy_balance_error']):.2e}.")
+    return notes
+
+
+COMPARED = ("peak_load", "max_load", "load_at_first_failure", "t_first_failure", "t_separated",
+            "crack_x", "crack_region", "crack_regions", "fragment_speed_max",
+            "fragment_kinetic_share")
+
+
+def comparison_notes(ds: xr.Dataset, rule: str = "compression") -> list[str]:
+    """One line per case and resolution where csph and csph_bl (000's CSPH as printed: Bonet–Lok
+    correction, nodal integration) both ran under ``rule``: the peak load before the first
+    failure, the load and time of the first failure, the largest load until the cut, the time and
+    place the crack cut the body, the regions the failed particles lie in and the fragments' top
+    speed and kinetic share, side by side."""
+    if "csph_bl" not in ds.solver.values or rule not in ds.rule.values:
+        return []
+    unit = "N/m" if ds.attrs.get("plane") == "strain" else "N"
+    notes = []
+    for case in ds.case.values:
+        for r in ds.resolution.values:
+            vals = {}
+            for solver in ("csph", "csph_bl"):
+                sel = dict(solver=solver, case=case, rule=rule, resolution=r)
+                if str(ds.status.sel(**sel).values) == "not run":
+                    break
+                vals[solver] = {k: ds[k].sel(**sel).values for k in COMPARED}
+            if len(vals) < 2:
+                continue
+
+            def one(v):
+                t_sep = float(v["t_separated"])
+                return (f"peak {float(v['peak_load']):.4g} {unit}, first failure "
+                        f"{float(v['load_at_first_failure']):.4g} {unit} at "
+                        f"{float(v['t_first_failure']) * 1e6:.3g} us, largest load until the cut "
+                        f"{float(v['max_load']):.4g} {unit}, "
+                        + (f"cut at {t_sep * 1e6:.3g} us through {v['crack_region']} at x = "
+                           f"{float(v['crack_x']) * 1e6:.2f} um" if np.isfinite(t_sep) else
+                           "never cut")
+                        + f" ({v['crack_regions']}), fragments up to "
+                        f"{float(v['fragment_speed_max']):.2g} m/s, "
+                        f"{100 * float(v['fragment_kinetic_share']):.2g} % of the released energy")
+
+            notes.append(f"000's method beside ours, {case}, {rule}, H/dx = {int(r)}: csph "
+                         f"{one(vals['csph'])}; csph_bl {one(vals['csph_bl'])}.")
+    return notes
+
+
+def crack_ladder_notes(ds: xr.Dataset) -> list[str]:
+    """Issue 36 item 3's line per solver and case with two runs or more that cut the body (the
+    default rule): where the crack cut it (x, region) and the largest load until the cut at each
+    resolution, with the peak load's observed order over the three finest where there are three."""
+    from .derive import _order3
+    from .gates import crack_ladder
+
+    unit = "N/m" if ds.attrs.get("plane") == "strain" else "N"
+    notes = []
+    for solver in ds.solver.values:
+        for case in ds.case.values:
+            res, x, reg, peak = crack_ladder(ds, str(case), solver=str(solver))
+            if len(res) < 2:
+                continue
+            order = (f"; observed order of the peak load (H/dx = {', '.join(map(str, res[-3:]))}) "
+                     f"{_order3(res[-3:].astype(float), peak[-3:]):.2f}" if len(res) >= 3 else "")
+            notes.append(f"crack ladder, {solver}, {case}: " + ", ".join(
+                f"H/dx = {r}: cut through {g} at x = {xx * 1e6:.2f} um, largest load {p:.4g} {unit}"
+                for r, xx, g, p in zip(res, x, reg, peak)) + order + ".")
     return notes

@@ -12,7 +12,7 @@ from .dataset import dataset
 from .ladders import (CASES, FEM_FULL_PATH_3D, FEM_MAX, FEM_MAX_ROOT, FEM_RESOLUTIONS,
                       FEM_RESOLUTIONS_3D, FEM_STEP, NAME, QUICK_FEM_RESOLUTIONS, SCENE, SOLVERS,
                       STATIC_RESOLUTIONS_3D, default_resolutions, options_for, quick_scene,
-                      rules_for, runs_rule, scene_for, static_resolutions)
+                      rules_for, runs_rule, scene_for, solver_rules, static_resolutions)
 from .scene import MicroCantilever
 from .static import csph_static, fem_deletion, fem_ladder, root_ladder_path
 
@@ -23,32 +23,38 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     rule, H/Δx = 5). ``fields`` (a folder): every run writes its particles as a ParaView series
     there (``field_runs``: only these (solver, resolution) pairs)."""
     scene = scene or SCENE()
-    solvers = list(solvers or SOLVERS)
+    if quick:
+        scene = quick_scene(scene)
+    table = default_resolutions(scene, quick)
+    solvers = list(solvers or table)  # quick: csph alone (ladders.QUICK_RESOLUTIONS)
     for s in solvers:
         if s not in SOLVERS:
             raise ValueError(f"solver: {s!r} is not supported by {NAME}; allowed: {', '.join(SOLVERS)}")
-    if quick:
-        scene = quick_scene(scene)
-    default = default_resolutions(scene, quick)["csph"]
-    if isinstance(resolutions, dict):
-        resolutions = resolutions.get("csph", default)
-    res = check_resolutions(resolutions or default)
+    if "csph" not in solvers:  # the gates, the FEM's window and the references are csph's
+        solvers.insert(0, "csph")
+    ladders = {s: check_resolutions(resolutions.get(s, table.get(s, table["csph"]))
+                                    if isinstance(resolutions, dict)
+                                    else (resolutions or table.get(s, table["csph"])))
+               for s in solvers}
+    res = sorted({r for lad in ladders.values() for r in lad})
     for r in res:  # a grain boundary thinner than the spacing is bad input, not a failed run
         scene.model(scene.H / r)
-    rules = rules_for(res, quick)
+    rules = rules_for(ladders["csph"], quick)
     tasks, keys = [], []
-    for case in CASES:
-        for rule in rules:
-            sc = scene_for(scene, case, rule)
-            for r in res:
-                if not runs_rule(rule, r, res):
-                    continue
-                sc.model(scene.H / r)  # a crack band too narrow for the spacing: bad input
-                opts = options_for(sc, rule)
-                if fields is not None and (field_runs is None or ("csph", r) in set(field_runs)):
-                    opts["fields"] = str(fields)
-                tasks.append(Task.make("csph", sc, r, **opts))
-                keys.append((case, rule, r))
+    for solver in solvers:
+        for case in CASES:
+            for rule in solver_rules(solver, rules):
+                sc = scene_for(scene, case, rule)
+                for r in ladders[solver]:
+                    if not runs_rule(rule, r, ladders[solver]):
+                        continue
+                    sc.model(scene.H / r)  # a crack band too narrow for the spacing: bad input
+                    opts = options_for(sc, rule)
+                    if fields is not None and (field_runs is None
+                                               or (solver, r) in set(field_runs)):
+                        opts["fields"] = str(fields)
+                    tasks.append(Task.make(solver, sc, r, **opts))
+                    keys.append((solver, case, rule, r))
     # gate 1's reference: the FEM ladder of the same grains — in 2-D after the runs, in 3-D
     # (minutes, one core) in a process of its own while the particle runs go on
     fem3d = _Background(fem_ladder, scene, FEM_RESOLUTIONS_3D, FEM_MAX, FEM_FULL_PATH_3D) \
@@ -73,12 +79,12 @@ def run(scene: MicroCantilever | None = None, solvers=None, resolutions=None, qu
     if quick:
         static = None
     elif scene.dim == 2:
-        static = {r: csph_static(scene, r) for r in static_resolutions(res)}
+        static = {r: csph_static(scene, r) for r in static_resolutions(ladders["csph"])}
     else:
         static = {r: csph_static(scene, r, fem_max=FEM_STEP) for r in STATIC_RESOLUTIONS_3D}
     # gate 6: the FEM with element deletion beside the particles (the full 2-D run)
     deletion = {c: fem_deletion(scene, c) for c in CASES} if scene.dim == 2 and not quick else None
-    ds = dataset(scene, outs, rules, res, fem, static, deletion)
+    ds = dataset(scene, outs, rules, res, fem, static, deletion, solvers)
     if fem_failed is not None:
         ds.attrs["fem_reference_failed"] = f"3-D FEM ladder H/h = {FEM_RESOLUTIONS_3D}: {fem_failed}"
     if fields is not None:
