@@ -7,7 +7,7 @@ import pytest
 
 from sph import classic, driver, particles
 from workbench.materials import RUBBER
-from workbench.scenes import Plate, Slab, with_overrides
+from workbench.scenes import Plate, with_overrides
 
 
 def block(size, n, mode="cell"):
@@ -47,18 +47,21 @@ def test_uniform_stress_gives_no_interior_force():
     assert np.abs(f[inner]).max() < 1e-9 * edge
 
 
-def test_slab_tensile_instability_is_detected_not_raised():
+def test_slab_tensile_instability_is_detected_not_raised(quick_verify):
     """003's baseline in pure tension: the Eulerian kernel lets the particles pair up (Swegle's
-    tensile instability); the run ends with an 'unstable: particle disorder …' status and NaN-free
-    bookkeeping. The Lagrangian-kernel HPM (with the zero-energy-mode stabilisation) runs the same
-    slab to the end — the contrast shows the test can fail."""
-    # resolution 6, as the stability study's quick run: the clumping starts at t ≈ 0.033 s there
-    out = driver.solve("sph", Slab(t_end=0.045), 6, stress="hyperelastic")
-    assert not out["stable"]
-    assert out["status"].startswith("unstable:") and "t=" in out["status"]
-    assert out["criterion"] in ("disorder", "non-finite")
-    ref = driver.solve("hpm", Slab(t_end=0.045), 6, stabilisation=1.0)
-    assert ref["stable"], ref["status"]
+    tensile instability); the run ends with an 'unstable: particle disorder … at t=…' status, a
+    result and not a crash. The Lagrangian-kernel HPM (with the zero-energy-mode stabilisation)
+    runs the same slab to the end — the contrast shows the test can fail. Read from the session's
+    `workbench verify --quick` (its stability study runs this slab at resolution 6, the clumping
+    from t ≈ 0.033 s), rather than run a second time here."""
+    import xarray as xr
+
+    out, proc = quick_verify
+    with xr.open_dataset(out / "stability.nc") as ds:
+        status = ds.status.sel(scene="slab", dt_factor=0.5)
+        sph, hpm = str(status.sel(solver="sph").values), str(status.sel(solver="hpm").values)
+    assert sph.startswith("unstable: particle disorder") and " at t=" in sph, sph
+    assert hpm == "ok", hpm
 
 
 def test_invalid_inputs_name_the_parameter():
