@@ -40,7 +40,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench.scenes.crack_path import CrackPathPlate
+from workbench.scenes.crack_path import CrackPathPlate, smooth_ramp
 
 from .common import Gate, error_rows, ladders, observed_order
 
@@ -105,7 +105,8 @@ def run(scene: CrackPathPlate | None = None, solvers=None, resolutions=None, qui
     first = (length > 0) & (ds["time"] == onset)  # the first record with a grown crack
     ds["onset_load"] = ds["grip"].where(first).max("time").assign_attrs(
         units="N/m", long_name="grip reaction at the crack's onset (first grown record)")
-    ds["onset_displacement"] = xr.apply_ufunc(_Ramp(scene), onset).assign_attrs(
+    delta = xr.apply_ufunc(smooth_ramp, onset, scene.period(), scene.rate)
+    ds["onset_displacement"] = delta.assign_attrs(
         units="m", long_name="each grip's displacement at the crack's onset")
     lefm = lefm_onset(scene)
     ds["onset_load_lefm"] = xr.DataArray(lefm["load"], attrs=dict(
@@ -116,18 +117,6 @@ def run(scene: CrackPathPlate | None = None, solvers=None, resolutions=None, qui
     ds["onset_ratio"] = (ds["onset_load"] / lefm["load"]).assign_attrs(
         units="-", long_name="onset load over LEFM's")
     return ds
-
-
-class _Ramp:
-    """δ(t) of the scene's grips (:func:`workbench.scenes.crack_path.smooth_ramp`)."""
-
-    def __init__(self, scene):
-        self.scene = scene
-
-    def __call__(self, t):
-        from workbench.scenes.crack_path import smooth_ramp
-
-        return smooth_ramp(t, self.scene.period(), self.scene.rate)
 
 
 class _Fixed:
